@@ -1,0 +1,146 @@
+"""Rotation math in one place (numpy, float64 inside, any leading batch shape).
+
+Conventions used everywhere in motiondiff:
+- quaternions are (w, x, y, z), Hamilton product, rotating column vectors: v' = q v q*;
+- rotation matrices act on column vectors: v' = R @ v;
+- Euler angles follow BVH: the channel order "ZXY" means R = Rz(a0) @ Rx(a1) @ Ry(a2) (intrinsic),
+  angles in degrees unless stated otherwise. Euler conversions go through scipy's Rotation.
+- 6D rotations are the first two columns of the matrix, ordered (R00, R10, R20, R01, R11, R21).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+_EPS = 1e-12
+
+
+def qnormalize(q: np.ndarray) -> np.ndarray:
+    return q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), _EPS)
+
+
+def qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product a * b (apply b first, then a)."""
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        axis=-1,
+    )
+
+
+def qinv(q: np.ndarray) -> np.ndarray:
+    """Inverse of a unit quaternion (its conjugate)."""
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def qrot(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rotate vectors v (..., 3) by unit quaternions q (..., 4)."""
+    w = q[..., :1]
+    u = q[..., 1:]
+    uv = np.cross(u, v)
+    return v + 2.0 * (w * uv + np.cross(u, uv))
+
+
+def qbetween(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Shortest-arc rotation taking direction u to direction v (the inputs need not be unit length)."""
+    axis = np.cross(u, v)
+    w = np.sqrt((u**2).sum(-1) * (v**2).sum(-1)) + (u * v).sum(-1)
+    return qnormalize(np.concatenate([w[..., None], axis], axis=-1))
+
+
+def qfix(q: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Make a quaternion sequence continuous along `axis` (q and -q are the same rotation; QuaterNet's fix)."""
+    q = np.moveaxis(np.array(q, dtype=np.float64, copy=True), axis, 0)
+    flip = (q[1:] * q[:-1]).sum(-1) < 0
+    sign = np.where(np.cumsum(flip, axis=0) % 2 == 1, -1.0, 1.0)
+    q[1:] *= sign[..., None]
+    return np.moveaxis(q, 0, axis)
+
+
+def qslerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Spherical interpolation between unit quaternions; t broadcasts against q0[..., 0]."""
+    t = np.asarray(t, dtype=np.float64)[..., None]
+    dot = (q0 * q1).sum(-1, keepdims=True)
+    q1 = np.where(dot < 0, -q1, q1)  # take the short way round
+    dot = np.abs(dot)
+    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    sin_theta = np.sin(theta)
+    near = sin_theta < 1e-6  # nearly identical: fall back to normalised lerp
+    safe = np.where(near, 1.0, sin_theta)
+    w0 = np.where(near, 1.0 - t, np.sin((1.0 - t) * theta) / safe)
+    w1 = np.where(near, t, np.sin(t * theta) / safe)
+    return qnormalize(w0 * q0 + w1 * q1)
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    q = qnormalize(q)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    m = np.stack(
+        [
+            1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+            2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+            2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
+        ],
+        axis=-1,
+    )  # fmt: skip
+    return m.reshape(q.shape[:-1] + (3, 3))
+
+
+def matrix_to_quat(m: np.ndarray) -> np.ndarray:
+    shape = m.shape[:-2]
+    xyzw = Rotation.from_matrix(m.reshape(-1, 3, 3)).as_quat()
+    return xyzw[:, [3, 0, 1, 2]].reshape(shape + (4,))
+
+
+def _check_order(order: str) -> str:
+    order = order.upper()
+    if len(order) != 3 or set(order) - set("XYZ"):
+        raise ValueError(f"Euler order must be three of X, Y, Z (e.g. 'ZXY'), got {order!r}")
+    return order
+
+
+def euler_to_matrix(angles: np.ndarray, order: str, degrees: bool = True) -> np.ndarray:
+    """Intrinsic Euler angles (..., 3) in `order` -> rotation matrices (..., 3, 3)."""
+    order = _check_order(order)
+    shape = angles.shape[:-1]
+    rot = Rotation.from_euler(order, angles.reshape(-1, 3), degrees=degrees)
+    return rot.as_matrix().reshape(shape + (3, 3))
+
+
+def matrix_to_euler(m: np.ndarray, order: str, degrees: bool = True) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) -> intrinsic Euler angles (..., 3) in `order`."""
+    import warnings
+
+    order = _check_order(order)
+    shape = m.shape[:-2]
+    with warnings.catch_warnings():
+        # At gimbal lock scipy picks one of the equivalent solutions and warns; the matrix is still exact.
+        warnings.simplefilter("ignore", UserWarning)
+        eul = Rotation.from_matrix(m.reshape(-1, 3, 3)).as_euler(order, degrees=degrees)
+    return eul.reshape(shape + (3,))
+
+
+def matrix_to_6d(m: np.ndarray) -> np.ndarray:
+    """First two columns, ordered (R00, R10, R20, R01, R11, R21)."""
+    return np.concatenate([m[..., :, 0], m[..., :, 1]], axis=-1)
+
+
+def sixd_to_matrix(d6: np.ndarray) -> np.ndarray:
+    """Gram-Schmidt on the two stored columns (Zhou et al. 2019)."""
+    a1, a2 = d6[..., :3], d6[..., 3:]
+    b1 = a1 / np.maximum(np.linalg.norm(a1, axis=-1, keepdims=True), _EPS)
+    b2 = a2 - (b1 * a2).sum(-1, keepdims=True) * b1
+    b2 = b2 / np.maximum(np.linalg.norm(b2, axis=-1, keepdims=True), _EPS)
+    b3 = np.cross(b1, b2)
+    return np.stack([b1, b2, b3], axis=-1)
+
+
+def quat_to_6d(q: np.ndarray) -> np.ndarray:
+    return matrix_to_6d(quat_to_matrix(q))

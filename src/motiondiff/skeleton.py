@@ -1,0 +1,292 @@
+"""Skeleton definitions: joint names, parents, rest offsets, feet, facing joints and body-part sets.
+
+Three sources: the SMPL 22-joint layout of HumanML3D, the 21-joint KIT-ML layout, and any skeleton read from a BVH
+file (parts inferred from joint names, see `Skeleton.infer`). Everything that needs to know "which joints are the
+left arm" or "which joints touch the ground" asks a `Skeleton`; nothing else hard-codes joint indices.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class Skeleton:
+    name: str
+    joint_names: tuple[str, ...]
+    parents: tuple[int, ...]  # -1 for the root
+    offsets: np.ndarray  # (J, 3) rest offset of each joint from its parent
+    foot_joints: tuple[tuple[int, ...], tuple[int, ...]]  # (left, right), used for foot contacts
+    parts: dict[str, tuple[int, ...]] = field(default_factory=dict)  # body-part presets for editing
+    # (right hip, left hip, right shoulder, left shoulder): defines the facing direction
+    face_joints: tuple[int, int, int, int] | None = None
+    # HumanML3D-style IK needs each joint's rest direction; for SMPL-22/KIT-21 these are axis-aligned unit vectors.
+    raw_offsets: np.ndarray | None = None
+    # Two joints whose bone lengths sum to the leg length that HumanML3D's uniform-skeleton step rescales by.
+    leg_joints: tuple[int, int] | None = None
+    fps: float | None = None
+
+    def __post_init__(self):
+        j = len(self.joint_names)
+        if len(self.parents) != j or np.shape(self.offsets) != (j, 3):
+            raise ValueError(f"skeleton {self.name!r}: names, parents and offsets disagree on the joint count")
+        for i, p in enumerate(self.parents):
+            if not (p == -1 and i == 0) and not (0 <= p < i):
+                raise ValueError(f"skeleton {self.name!r}: joints must be ordered parents first (joint {i})")
+
+    @property
+    def num_joints(self) -> int:
+        return len(self.joint_names)
+
+    def index(self, joint: str | int) -> int:
+        if isinstance(joint, int | np.integer):
+            return int(joint)
+        try:
+            return self.joint_names.index(joint)
+        except ValueError:
+            raise KeyError(f"skeleton {self.name!r} has no joint {joint!r}; joints: {', '.join(self.joint_names)}")
+
+    def part(self, name: str) -> tuple[int, ...]:
+        """Joint indices of a body-part preset (e.g. 'lower_body', 'left_arm')."""
+        if name not in self.parts:
+            raise KeyError(f"unknown body part {name!r} for skeleton {self.name!r}; choose from {sorted(self.parts)}")
+        return self.parts[name]
+
+    @cached_property
+    def children(self) -> tuple[tuple[int, ...], ...]:
+        kids: list[list[int]] = [[] for _ in self.parents]
+        for i, p in enumerate(self.parents):
+            if p >= 0:
+                kids[p].append(i)
+        return tuple(tuple(k) for k in kids)
+
+    @cached_property
+    def kinematic_chains(self) -> tuple[tuple[int, ...], ...]:
+        """Chains from a branching joint (or the root) to each leaf, for drawing and chain-wise IK."""
+        chains = []
+        for start in [0] + [i for i, k in enumerate(self.children) if len(k) > 1 and i != 0]:
+            for child in self.children[start]:
+                chain = [start, child]
+                while len(self.children[chain[-1]]) == 1:
+                    chain.append(self.children[chain[-1]][0])
+                chains.append(tuple(chain))
+        return tuple(chains)
+
+    @property
+    def bone_lengths(self) -> np.ndarray:
+        return np.linalg.norm(self.offsets, axis=-1)
+
+    def with_offsets(self, offsets: np.ndarray) -> Skeleton:
+        return _replace(self, offsets=np.asarray(offsets, dtype=np.float64))
+
+    # ---- any skeleton (BVH) --------------------------------------------------------------------------------
+    @classmethod
+    def infer(cls, name: str, joint_names, parents, offsets, fps: float | None = None) -> Skeleton:
+        """Build a skeleton from names and topology, inferring sides, limbs and feet from the joint names.
+
+        Works for the usual mocap naming schemes (Bandai 'UpperLeg_L', CMU/Mixamo 'LeftUpLeg', ASF-style
+        'lfemur'). Joints whose role cannot be read from the name count as torso.
+        """
+        joint_names = tuple(joint_names)
+        roles = [_joint_role(n) for n in joint_names]
+        sides = [_joint_side(n) for n in joint_names]
+        parents = tuple(int(p) for p in parents)
+        # A limb role propagates to descendants (fingers under a hand, toes under a foot).
+        for i, p in enumerate(parents):
+            if p >= 0 and roles[i] in ("torso", "head") and roles[p] in ("arm", "leg"):
+                roles[i] = roles[p]
+            if p >= 0 and sides[i] is None and roles[i] in ("arm", "leg"):
+                sides[i] = sides[p]
+        limb = {
+            (role, side): tuple(i for i in range(len(joint_names)) if roles[i] == role and sides[i] == side)
+            for role in ("arm", "leg")
+            for side in ("left", "right")
+        }
+        feet = tuple(
+            tuple(i for i in limb[("leg", side)] if re.search(r"foot|ankle|toe", joint_names[i], re.I))
+            for side in ("left", "right")
+        )
+        torso = tuple(i for i in range(len(joint_names)) if roles[i] == "torso")
+        head = tuple(i for i in range(len(joint_names)) if roles[i] == "head")
+        parts = _standard_parts(
+            root=0,
+            torso=torso,
+            head=head,
+            left_arm=limb[("arm", "left")],
+            right_arm=limb[("arm", "right")],
+            left_leg=limb[("leg", "left")],
+            right_leg=limb[("leg", "right")],
+        )
+        face = None
+        if all(limb[k] for k in limb):
+            face = tuple(_first_matching(limb[("leg", s)], joint_names, _UPPER_LEG) for s in ("right", "left"))
+            face += tuple(_first_matching(limb[("arm", s)], joint_names, _UPPER_ARM) for s in ("right", "left"))
+        return cls(
+            name=name,
+            joint_names=joint_names,
+            parents=parents,
+            offsets=np.asarray(offsets, dtype=np.float64),
+            foot_joints=feet,  # type: ignore[arg-type]
+            parts=parts,
+            face_joints=face,  # type: ignore[arg-type]
+            fps=fps,
+        )
+
+
+def _replace(skel: Skeleton, **changes) -> Skeleton:
+    from dataclasses import replace
+
+    return replace(skel, **changes)
+
+
+def _tokens(name: str) -> list[str]:
+    spaced = re.sub(r"([a-z0-9])([A-Z])", r"\1 \2", name)
+    return [t.lower() for t in re.split(r"[^A-Za-z0-9]+", spaced) if t]
+
+
+_LEG = re.compile(r"upleg|thigh|femur|leg|knee|shin|calf|tibia|ankle|foot|toe|hipjoint")
+_ARM = re.compile(r"shoulder|clavicle|collar|arm|humerus|elbow|radius|wrist|hand|finger|thumb|index|middle|ring|pinky")
+_HEAD = re.compile(r"neck|head|skull|jaw|eye")
+
+
+def _joint_role(name: str) -> str:
+    low = name.lower()
+    if _LEG.search(low) or (re.fullmatch(r"[lr]_?hip", low) or re.search(r"(left|right)_?hip", low)):
+        return "leg"
+    if _ARM.search(low):
+        return "arm"
+    if _HEAD.search(low):
+        return "head"
+    return "torso"
+
+
+def _joint_side(name: str) -> str | None:
+    tokens = _tokens(name)
+    if {"l", "left"} & set(tokens):
+        return "left"
+    if {"r", "right"} & set(tokens):
+        return "right"
+    low = name.lower()
+    # ASF-style names glue the side on: 'lfemur', 'rhumerus', 'lhipjoint'.
+    if len(low) > 2 and low[0] in "lr" and (_LEG.match(low[1:]) or _ARM.match(low[1:]) or low[1:] == "hipjoint"):
+        return "left" if low[0] == "l" else "right"
+    return None
+
+
+# The joints that set hip and shoulder width (not the CMU 'LHipJoint' at the pelvis, not the clavicle).
+_UPPER_LEG = re.compile(r"up_?per_?leg|upleg|thigh|femur|hip(?!joint)", re.I)
+_UPPER_ARM = re.compile(r"up_?per_?arm|uparm|humerus|(^|[^a-z])arm$|(left|right)arm$", re.I)
+
+
+def _first_matching(limb: tuple[int, ...], names: tuple[str, ...], pattern: re.Pattern) -> int:
+    for i in limb:
+        if pattern.search(names[i]):
+            return i
+    return limb[1] if len(limb) > 2 else limb[0]
+
+
+def _standard_parts(root, torso, head, left_arm, right_arm, left_leg, right_leg) -> dict[str, tuple[int, ...]]:
+    """Body-part presets shared by every skeleton (MDM's lower body = root + legs; upper = the rest)."""
+    lower = tuple(sorted({root, *left_leg, *right_leg}))
+    upper = tuple(sorted((set(torso) | set(head) | set(left_arm) | set(right_arm)) - {root}))
+    return {
+        "lower_body": lower,
+        "upper_body": upper,
+        "left_arm": tuple(left_arm),
+        "right_arm": tuple(right_arm),
+        "arms": tuple(sorted({*left_arm, *right_arm})),
+        "left_leg": tuple(left_leg),
+        "right_leg": tuple(right_leg),
+        "legs": tuple(sorted({*left_leg, *right_leg})),
+        "torso": tuple(sorted(set(torso) - {root})),
+        "head": tuple(head),
+        "root": (root,),
+    }
+
+
+def _from_chains(num_joints: int, chains) -> tuple[int, ...]:
+    parents = [-1] * num_joints
+    for chain in chains:
+        for a, b in zip(chain[:-1], chain[1:], strict=True):
+            parents[b] = a
+    return tuple(parents)
+
+
+# ---- SMPL 22 joints (HumanML3D) -------------------------------------------------------------------------------
+SMPL22_NAMES = (
+    "pelvis", "l_hip", "r_hip", "spine1", "l_knee", "r_knee", "spine2", "l_ankle", "r_ankle", "spine3",
+    "l_foot", "r_foot", "neck", "l_collar", "r_collar", "head", "l_shoulder", "r_shoulder", "l_elbow",
+    "r_elbow", "l_wrist", "r_wrist",
+)  # fmt: skip
+SMPL22_CHAINS = ((0, 2, 5, 8, 11), (0, 1, 4, 7, 10), (0, 3, 6, 9, 12, 15), (9, 14, 17, 19, 21), (9, 13, 16, 18, 20))
+# Rest direction of each joint's bone in HumanML3D's IK (x left, y up, z forward).
+SMPL22_RAW_OFFSETS = np.array(
+    [[0, 0, 0], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0],
+     [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, 1, 0], [1, 0, 0], [-1, 0, 0], [0, 0, 1], [0, -1, 0], [0, -1, 0],
+     [0, -1, 0], [0, -1, 0], [0, -1, 0], [0, -1, 0]],
+    dtype=np.float64,
+)  # fmt: skip
+# HumanML3D's target skeleton (bone lengths of joints 1..21 in metres, from its reference motion 000021).
+SMPL22_BONE_LENGTHS = np.array(
+    [0.0, .1031, .1099, .1316, .3936, .3902, .1432, .4324, .4256, .0574, .1434, .1494, .2194, .1375, .1434,
+     .1030, .1316, .1230, .2568, .2631, .2660, .2699]
+)  # fmt: skip
+
+SMPL22 = Skeleton(
+    name="smpl22",
+    joint_names=SMPL22_NAMES,
+    parents=_from_chains(22, SMPL22_CHAINS),
+    offsets=SMPL22_RAW_OFFSETS * SMPL22_BONE_LENGTHS[:, None],
+    foot_joints=((7, 10), (8, 11)),
+    parts=_standard_parts(
+        root=0, torso=(3, 6, 9), head=(12, 15), left_arm=(13, 16, 18, 20), right_arm=(14, 17, 19, 21),
+        left_leg=(1, 4, 7, 10), right_leg=(2, 5, 8, 11),
+    ),  # fmt: skip
+    face_joints=(2, 1, 17, 16),
+    raw_offsets=SMPL22_RAW_OFFSETS,
+    leg_joints=(5, 8),
+    fps=20.0,
+)
+
+# ---- KIT-ML 21 joints (MMM model) -----------------------------------------------------------------------------
+KIT21_NAMES = (
+    "root", "BP", "BT", "BLN", "BUN", "RS", "RE", "RW", "LS", "LE", "LW",
+    "RH", "RK", "RA", "RMrot", "RF", "LH", "LK", "LA", "LMrot", "LF",
+)  # fmt: skip
+KIT21_CHAINS = ((0, 11, 12, 13, 14, 15), (0, 16, 17, 18, 19, 20), (0, 1, 2, 3, 4), (3, 5, 6, 7), (3, 8, 9, 10))
+KIT21_RAW_OFFSETS = np.array(
+    [[0, 0, 0], [0, 1, 0], [0, 1, 0], [0, 1, 0], [0, 1, 0], [1, 0, 0], [0, -1, 0], [0, -1, 0], [-1, 0, 0],
+     [0, -1, 0], [0, -1, 0], [1, 0, 0], [0, -1, 0], [0, -1, 0], [0, 0, 1], [0, 0, 1], [-1, 0, 0], [0, -1, 0],
+     [0, -1, 0], [0, 0, 1], [0, 0, 1]],
+    dtype=np.float64,
+)  # fmt: skip
+
+KIT21 = Skeleton(
+    name="kit21",
+    joint_names=KIT21_NAMES,
+    parents=_from_chains(21, KIT21_CHAINS),
+    # KIT-ML's target bone lengths come from its motion 03950 (not shipped here); unit bones until a user's data
+    # supplies them (`features_from_joints` then keeps the input's own bone lengths).
+    offsets=KIT21_RAW_OFFSETS.copy(),
+    foot_joints=((19, 20), (14, 15)),
+    parts=_standard_parts(
+        root=0, torso=(1, 2), head=(3, 4), left_arm=(8, 9, 10), right_arm=(5, 6, 7),
+        left_leg=(16, 17, 18, 19, 20), right_leg=(11, 12, 13, 14, 15),
+    ),  # fmt: skip
+    face_joints=(11, 16, 5, 8),
+    raw_offsets=KIT21_RAW_OFFSETS,
+    leg_joints=(17, 18),
+    fps=12.5,
+)
+
+SKELETONS = {"smpl22": SMPL22, "kit21": KIT21}
+
+
+def get_skeleton(name: str) -> Skeleton:
+    if name not in SKELETONS:
+        raise KeyError(f"unknown skeleton {name!r}; choose from {sorted(SKELETONS)} or build one with Skeleton.infer")
+    return SKELETONS[name]
