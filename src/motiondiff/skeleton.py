@@ -29,6 +29,8 @@ class Skeleton:
     # Two joints whose bone lengths sum to the leg length that HumanML3D's uniform-skeleton step rescales by.
     leg_joints: tuple[int, int] | None = None
     fps: float | None = None
+    # Chains as the dataset defines them (HumanML3D's IK walks these; each starts from the root rotation).
+    chains: tuple[tuple[int, ...], ...] | None = None
 
     def __post_init__(self):
         j = len(self.joint_names)
@@ -66,7 +68,9 @@ class Skeleton:
 
     @cached_property
     def kinematic_chains(self) -> tuple[tuple[int, ...], ...]:
-        """Chains from a branching joint (or the root) to each leaf, for drawing and chain-wise IK."""
+        """Chains to each leaf, for drawing and chain-wise IK: the dataset's own, else split at branching joints."""
+        if self.chains is not None:
+            return self.chains
         chains = []
         for start in [0] + [i for i, k in enumerate(self.children) if len(k) > 1 and i != 0]:
             for child in self.children[start]:
@@ -230,10 +234,13 @@ SMPL22_RAW_OFFSETS = np.array(
      [0, -1, 0], [0, -1, 0], [0, -1, 0], [0, -1, 0]],
     dtype=np.float64,
 )  # fmt: skip
-# HumanML3D's target skeleton (bone lengths of joints 1..21 in metres, from its reference motion 000021).
+# HumanML3D's target skeleton: bone lengths (m) of joints 1..21. The official pipeline retargets every clip to the
+# skeleton of its motion 000021; these are the lengths measured on the official sample new_joints/012314 (constant
+# to 1e-6 over its frames). The 4-digit values of the procedure notes are too coarse to reproduce features to 1e-4.
 SMPL22_BONE_LENGTHS = np.array(
-    [0.0, .1031, .1099, .1316, .3936, .3902, .1432, .4324, .4256, .0574, .1434, .1494, .2194, .1375, .1434,
-     .1030, .1316, .1230, .2568, .2631, .2660, .2699]
+    [0.0, 0.10307397, 0.10988336, 0.13156823, 0.39362319, 0.39018822, 0.14319022, 0.43243300, 0.42564340,
+     0.05736474, 0.14338179, 0.14941905, 0.21936005, 0.13748679, 0.14338281, 0.10303921, 0.13161396, 0.12298439,
+     0.25683990, 0.26309186, 0.26601182, 0.26987629]
 )  # fmt: skip
 
 SMPL22 = Skeleton(
@@ -250,6 +257,7 @@ SMPL22 = Skeleton(
     raw_offsets=SMPL22_RAW_OFFSETS,
     leg_joints=(5, 8),
     fps=20.0,
+    chains=SMPL22_CHAINS,
 )
 
 # ---- KIT-ML 21 joints (MMM model) -----------------------------------------------------------------------------
@@ -281,6 +289,7 @@ KIT21 = Skeleton(
     raw_offsets=KIT21_RAW_OFFSETS,
     leg_joints=(17, 18),
     fps=12.5,
+    chains=KIT21_CHAINS,
 )
 
 SKELETONS = {"smpl22": SMPL22, "kit21": KIT21}

@@ -1,0 +1,111 @@
+"""Dataset-agnostic motion records, the torch Dataset over them, and the padding collate.
+
+Every dataset loader (the prepared npz of Bandai/BVH data, the official HumanML3D/KIT layouts, ...) turns its files
+into a list of `MotionRecord`s plus Mean/Std; `MotionDataset` and `collate_motion` are shared by all of them, so a
+batch always looks the same: {motion [B,N,D], mask [B,N], length [B], text [B], action [B], id [B]}.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+from torch.utils.data import Dataset
+
+NO_ACTION = -1
+
+
+@dataclass
+class MotionRecord:
+    id: str
+    motion: np.ndarray  # (N, D) features, not normalised
+    texts: list[str] = field(default_factory=list)  # captions; several per clip are sampled at random in training
+    action: int = NO_ACTION
+    meta: dict = field(default_factory=dict)  # anything dataset-specific (labels, tokens, source file)
+
+    @property
+    def length(self) -> int:
+        return int(self.motion.shape[0])
+
+
+class MotionDataset(Dataset):
+    """Normalised, optionally randomly cropped motion clips with one caption each.
+
+    `train=True`: a random caption and (for clips longer than `max_frames`) a random window each time;
+    `train=False`: the first caption and the first window, so evaluation is repeatable.
+    Lengths are rounded down to a multiple of `unit_length` (the official HumanML3D loader uses 4).
+    """
+
+    def __init__(
+        self,
+        records: list[MotionRecord],
+        mean: np.ndarray,
+        std: np.ndarray,
+        max_frames: int = 196,
+        unit_length: int = 1,
+        train: bool = True,
+        seed: int = 0,
+    ):
+        if not records:
+            raise ValueError("MotionDataset got no clips: check the split file and the length limits")
+        dim = records[0].motion.shape[1]
+        if mean.shape != (dim,) or std.shape != (dim,):
+            raise ValueError(f"Mean/Std have shapes {mean.shape}/{std.shape} but the features have {dim} dims")
+        self.records = records
+        self.mean = mean.astype(np.float32)
+        self.std = np.where(std < 1e-8, 1.0, std).astype(np.float32)  # constant dims stay finite
+        self.max_frames = max_frames
+        self.unit_length = unit_length
+        self.train = train
+        self.rng = np.random.default_rng(seed)
+
+    def __len__(self) -> int:
+        return len(self.records)
+
+    def normalise(self, motion: np.ndarray) -> np.ndarray:
+        return (motion - self.mean) / self.std
+
+    def denormalise(self, motion):
+        if isinstance(motion, torch.Tensor):
+            return motion * torch.as_tensor(self.std, device=motion.device) + torch.as_tensor(self.mean, device=motion.device)
+        return motion * self.std + self.mean
+
+    def __getitem__(self, index: int) -> dict:
+        rec = self.records[index]
+        n = min(rec.length, self.max_frames)
+        n = max(self.unit_length, n - n % self.unit_length)
+        start = 0
+        if self.train and rec.length > n:
+            start = int(self.rng.integers(0, rec.length - n + 1))
+        motion = self.normalise(rec.motion[start : start + n])
+        if rec.texts:
+            text = rec.texts[int(self.rng.integers(len(rec.texts)))] if self.train else rec.texts[0]
+        else:
+            text = ""
+        return {
+            "motion": torch.from_numpy(np.ascontiguousarray(motion, dtype=np.float32)),
+            "length": n,
+            "text": text,
+            "action": rec.action,
+            "id": rec.id,
+        }
+
+
+def collate_motion(items: list[dict]) -> dict:
+    """Pad to the longest clip of the batch; mask is True on valid frames."""
+    lengths = torch.tensor([it["length"] for it in items], dtype=torch.long)
+    n_max = int(lengths.max())
+    dim = items[0]["motion"].shape[1]
+    motion = torch.zeros(len(items), n_max, dim)
+    for i, it in enumerate(items):
+        motion[i, : it["length"]] = it["motion"]
+    mask = torch.arange(n_max)[None, :] < lengths[:, None]
+    return {
+        "motion": motion,
+        "mask": mask,
+        "length": lengths,
+        "text": [it["text"] for it in items],
+        "action": torch.tensor([it["action"] for it in items], dtype=torch.long),
+        "id": [it["id"] for it in items],
+    }

@@ -1,0 +1,60 @@
+"""Joint mappings between skeletons, kept as data (JSON files in motiondiff/assets/).
+
+A map says, for every joint of the target skeleton, which source joints it is the mean of (usually one; e.g. SMPL's
+spine2 is the midpoint of Bandai's Spine and Chest), plus the factor that converts the source units to metres.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from motiondiff.skeleton import get_skeleton
+
+
+@dataclass(frozen=True)
+class JointMap:
+    source: str
+    target: str
+    units_to_metres: float
+    joints: dict[str, list[str]]  # target joint name -> source joint names (averaged)
+
+    @classmethod
+    def load(cls, name_or_path: str | Path) -> JointMap:
+        """A shipped map by name (e.g. 'bandai_to_smpl22') or a JSON file of the same format."""
+        path = Path(name_or_path)
+        if path.suffix != ".json":
+            path = resources.files("motiondiff") / "assets" / f"{name_or_path}.json"
+        try:
+            spec = json.loads(Path(str(path)).read_text())
+        except FileNotFoundError:
+            shipped = sorted(p.name[:-5] for p in (resources.files("motiondiff") / "assets").iterdir())
+            raise FileNotFoundError(f"joint map {name_or_path!r} not found; shipped maps: {shipped}") from None
+        target = get_skeleton(spec["target"])
+        missing = [j for j in target.joint_names if j not in spec["joints"]]
+        if missing:
+            raise ValueError(f"joint map {path} does not define target joints {missing}")
+        return cls(spec["source"], spec["target"], float(spec["units_to_metres"]), spec["joints"])
+
+    def weights(self, source_names: list[str]) -> np.ndarray:
+        """(J_target, J_source) averaging matrix for a source skeleton with these joint names."""
+        target = get_skeleton(self.target)
+        w = np.zeros((target.num_joints, len(source_names)))
+        for t, name in enumerate(target.joint_names):
+            for src in self.joints[name]:
+                if src not in source_names:
+                    raise ValueError(
+                        f"joint map {self.source}->{self.target} needs source joint {src!r}, which this skeleton "
+                        f"lacks (joints: {', '.join(source_names)})"
+                    )
+                w[t, source_names.index(src)] = 1.0 / len(self.joints[name])
+        return w
+
+    def apply(self, positions: np.ndarray, source_names: list[str], to_metres: bool = True) -> np.ndarray:
+        """Source positions (..., J_source, 3) -> target positions (..., J_target, 3), in metres by default."""
+        out = np.einsum("ts,...sc->...tc", self.weights(source_names), positions)
+        return out * self.units_to_metres if to_metres else out
