@@ -50,7 +50,9 @@ class Skeleton:
         try:
             return self.joint_names.index(joint)
         except ValueError:
-            raise KeyError(f"skeleton {self.name!r} has no joint {joint!r}; joints: {', '.join(self.joint_names)}")
+            raise KeyError(
+                f"skeleton {self.name!r} has no joint {joint!r}; joints: {', '.join(self.joint_names)}"
+            ) from None
 
     def part(self, name: str) -> tuple[int, ...]:
         """Joint indices of a body-part preset (e.g. 'lower_body', 'left_arm')."""
@@ -226,7 +228,13 @@ SMPL22_NAMES = (
     "l_foot", "r_foot", "neck", "l_collar", "r_collar", "head", "l_shoulder", "r_shoulder", "l_elbow",
     "r_elbow", "l_wrist", "r_wrist",
 )  # fmt: skip
-SMPL22_CHAINS = ((0, 2, 5, 8, 11), (0, 1, 4, 7, 10), (0, 3, 6, 9, 12, 15), (9, 14, 17, 19, 21), (9, 13, 16, 18, 20))
+SMPL22_CHAINS = (
+    (0, 2, 5, 8, 11),
+    (0, 1, 4, 7, 10),
+    (0, 3, 6, 9, 12, 15),
+    (9, 14, 17, 19, 21),
+    (9, 13, 16, 18, 20),
+)
 # Rest direction of each joint's bone in HumanML3D's IK (x left, y up, z forward).
 SMPL22_RAW_OFFSETS = np.array(
     [[0, 0, 0], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0],
@@ -250,8 +258,13 @@ SMPL22 = Skeleton(
     offsets=SMPL22_RAW_OFFSETS * SMPL22_BONE_LENGTHS[:, None],
     foot_joints=((7, 10), (8, 11)),
     parts=_standard_parts(
-        root=0, torso=(3, 6, 9), head=(12, 15), left_arm=(13, 16, 18, 20), right_arm=(14, 17, 19, 21),
-        left_leg=(1, 4, 7, 10), right_leg=(2, 5, 8, 11),
+        root=0,
+        torso=(3, 6, 9),
+        head=(12, 15),
+        left_arm=(13, 16, 18, 20),
+        right_arm=(14, 17, 19, 21),
+        left_leg=(1, 4, 7, 10),
+        right_leg=(2, 5, 8, 11),
     ),  # fmt: skip
     face_joints=(2, 1, 17, 16),
     raw_offsets=SMPL22_RAW_OFFSETS,
@@ -265,7 +278,13 @@ KIT21_NAMES = (
     "root", "BP", "BT", "BLN", "BUN", "RS", "RE", "RW", "LS", "LE", "LW",
     "RH", "RK", "RA", "RMrot", "RF", "LH", "LK", "LA", "LMrot", "LF",
 )  # fmt: skip
-KIT21_CHAINS = ((0, 11, 12, 13, 14, 15), (0, 16, 17, 18, 19, 20), (0, 1, 2, 3, 4), (3, 5, 6, 7), (3, 8, 9, 10))
+KIT21_CHAINS = (
+    (0, 11, 12, 13, 14, 15),
+    (0, 16, 17, 18, 19, 20),
+    (0, 1, 2, 3, 4),
+    (3, 5, 6, 7),
+    (3, 8, 9, 10),
+)
 KIT21_RAW_OFFSETS = np.array(
     [[0, 0, 0], [0, 1, 0], [0, 1, 0], [0, 1, 0], [0, 1, 0], [1, 0, 0], [0, -1, 0], [0, -1, 0], [-1, 0, 0],
      [0, -1, 0], [0, -1, 0], [1, 0, 0], [0, -1, 0], [0, -1, 0], [0, 0, 1], [0, 0, 1], [-1, 0, 0], [0, -1, 0],
@@ -282,8 +301,13 @@ KIT21 = Skeleton(
     offsets=KIT21_RAW_OFFSETS.copy(),
     foot_joints=((19, 20), (14, 15)),
     parts=_standard_parts(
-        root=0, torso=(1, 2), head=(3, 4), left_arm=(8, 9, 10), right_arm=(5, 6, 7),
-        left_leg=(16, 17, 18, 19, 20), right_leg=(11, 12, 13, 14, 15),
+        root=0,
+        torso=(1, 2),
+        head=(3, 4),
+        left_arm=(8, 9, 10),
+        right_arm=(5, 6, 7),
+        left_leg=(16, 17, 18, 19, 20),
+        right_leg=(11, 12, 13, 14, 15),
     ),  # fmt: skip
     face_joints=(11, 16, 5, 8),
     raw_offsets=KIT21_RAW_OFFSETS,

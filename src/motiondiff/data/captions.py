@@ -23,8 +23,8 @@ CONTENT_PHRASES = {
     "run": "runs",
     "dash": "dashes at full speed",
     "walk-back": "walks backward",
-    "walk-left": "walks to the left",
-    "walk-right": "walks to the right",
+    "walk-left": "walks forward and to the left",  # measured: a diagonal path, body facing the way it goes
+    "walk-right": "walks forward and to the right",
     "walk-turn-left": "walks and turns left",
     "walk-turn-right": "walks and turns right",
     "bow": "bows",
@@ -93,10 +93,7 @@ def measure(joints: np.ndarray, fps: float = 20.0) -> MotionFacts:
     duration = (len(joints) - 1) / fps
     disp = root[-1] - root[0]
     distance = float(np.linalg.norm(disp))
-    direction = None
-    if distance > 0.3:  # below ~one step the travel direction is noise
-        x, z = disp  # x = left, z = forward (start facing)
-        direction = ("forward" if z > 0 else "backward") if abs(z) >= abs(x) else ("to the left" if x > 0 else "to the right")
+    direction = _direction(disp) if distance > 0.3 else None  # below ~one step the direction is noise
     turn = _facing_angle(joints[-1]) - _facing_angle(joints[0])
     turn = float((np.degrees(turn) + 180.0) % 360.0 - 180.0)
     min_time = int(round(0.3 * fps))  # a hand counts as raised when it stays up for 0.3 s
@@ -105,7 +102,9 @@ def measure(joints: np.ndarray, fps: float = 20.0) -> MotionFacts:
         return int(above.sum()) >= min_time
 
     head_y = joints[:, idx["head"], 1]
-    above_head = tuple(s for s, w in (("left", "l_wrist"), ("right", "r_wrist")) if raised(joints[:, idx[w], 1] > head_y))
+    above_head = tuple(
+        s for s, w in (("left", "l_wrist"), ("right", "r_wrist")) if raised(joints[:, idx[w], 1] > head_y)
+    )
     above_sh = tuple(
         s for s, w, sh in (("left", "l_wrist", "l_shoulder"), ("right", "r_wrist", "r_shoulder"))
         if raised(joints[:, idx[w], 1] > joints[:, idx[sh], 1] + 0.05)
@@ -122,6 +121,16 @@ def measure(joints: np.ndarray, fps: float = 20.0) -> MotionFacts:
     )
 
 
+_DIRECTIONS = ("forward", "forward and to the left", "to the left", "backward and to the left", "backward",
+               "backward and to the right", "to the right", "forward and to the right")  # fmt: skip
+
+
+def _direction(disp: np.ndarray) -> str:
+    """One of 8 directions of a ground displacement (x = left, z = forward of the start facing)."""
+    angle = np.degrees(np.arctan2(disp[0], disp[1]))  # 0 = forward, 90 = left
+    return _DIRECTIONS[int(np.round(angle / 45.0)) % 8]
+
+
 def _facing_angle(frame: np.ndarray) -> float:
     """Yaw of the body's forward direction (0 = +Z, positive towards +X = left)."""
     across = (frame[2] - frame[1]) + (frame[17] - frame[16])  # right minus left (hips + shoulders)
@@ -131,8 +140,8 @@ def _facing_angle(frame: np.ndarray) -> float:
 
 def _hands_phrase(hands: tuple[str, ...], where: str) -> str:
     if len(hands) == 2:
-        return f"raising both hands {where}"
-    return f"raising the {hands[0]} hand {where}"
+        return f"with both hands {where}"
+    return f"with the {hands[0]} hand {where}"
 
 
 def _round_metres(d: float) -> str:

@@ -68,7 +68,9 @@ class MotionDataset(Dataset):
 
     def denormalise(self, motion):
         if isinstance(motion, torch.Tensor):
-            return motion * torch.as_tensor(self.std, device=motion.device) + torch.as_tensor(self.mean, device=motion.device)
+            return motion * torch.as_tensor(self.std, device=motion.device) + torch.as_tensor(
+                self.mean, device=motion.device
+            )
         return motion * self.std + self.mean
 
     def __getitem__(self, index: int) -> dict:

@@ -139,11 +139,19 @@ def canonicalize_joints(
     if isinstance(target_lengths, str):
         target_lengths = _default_lengths(skeleton)
     positions = uniform_skeleton(joints, skeleton, target_lengths)
-    positions[:, :, 1] -= positions[:, :, 1].min()
-    positions -= positions[0, 0] * np.array([1.0, 0.0, 1.0])
+    rotation, shift = ground_and_face(positions, skeleton)
+    return qrot(np.broadcast_to(rotation, positions.shape[:-1] + (4,)), positions + shift)
+
+
+def ground_and_face(positions: np.ndarray, skeleton: Skeleton) -> tuple[np.ndarray, np.ndarray]:
+    """The rigid placement HumanML3D applies: p -> qrot(rotation, p + shift) puts the lowest joint of the clip on
+    y = 0, frame 0's root at x = z = 0, and turns frame 0's facing to +Z. Returns (quaternion (4,), shift (3,))."""
+    shift = -positions[0, 0] * np.array([1.0, 0.0, 1.0])
+    shift[1] = -positions[..., 1].min()
     r_hip, l_hip, r_sdr, l_sdr = skeleton.face_joints
-    across = (positions[0, r_hip] - positions[0, l_hip]) + (positions[0, r_sdr] - positions[0, l_sdr])
-    return qrot(np.broadcast_to(_facing_rotation(across), positions.shape[:-1] + (4,)), positions)
+    first = positions[0]
+    across = (first[r_hip] - first[l_hip]) + (first[r_sdr] - first[l_sdr])
+    return _facing_rotation(across), shift
 
 
 def _default_lengths(skeleton: Skeleton) -> np.ndarray | None:
@@ -218,3 +226,21 @@ def joints_from_features(features: np.ndarray, num_joints: int | None = None) ->
     local[..., 0] += r_pos[..., None, 0]
     local[..., 2] += r_pos[..., None, 2]
     return np.concatenate([r_pos[..., None, :], local], axis=-2).astype(np.float32)
+
+
+# ---- normalisation ----------------------------------------------------------------------------------------------
+FEATURE_STD_BIAS = 5.0  # HumanML3D divides the std of the root and contact blocks by 5 so they weigh more
+
+
+def mean_std(features: np.ndarray, num_joints: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Mean/Std the HumanML3D way: per-dim mean; std averaged within each block (root rotation velocity, root
+    linear velocity, root height, positions, rotations, velocities, contacts), root and contact blocks / 5."""
+    features = np.asarray(features, dtype=np.float64)
+    j = num_joints or skeleton_for_dim(features.shape[-1]).num_joints
+    mean = features.mean(axis=0)
+    raw = features.std(axis=0)
+    std = np.empty_like(raw)
+    for name, sl in feature_slices(j).items():
+        bias = 1.0 if name in ("ric", "rot6d", "local_vel") else FEATURE_STD_BIAS
+        std[sl] = raw[sl].mean() / bias
+    return mean.astype(np.float32), std.astype(np.float32)

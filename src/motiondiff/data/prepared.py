@@ -9,7 +9,7 @@ each clip starts. Arrays (C clips, F frames in all, J native joints):
     features (F - C, 263)                          HumanML3D features, N-1 rows per clip          [derived]
     native_rotations (F, J, 4), native_root (F, 3) local joint quaternions (w,x,y,z) + root position
     native_positions (F, J, 3)                     FK of the above, metres                          [derived]
-    native_joint_names, native_parents, native_offsets (J, 3)
+    native_joint_names, native_parents (J), native_offsets (C, J, 3)   bone offsets per clip (performers differ)
     captions (K), caption_offsets (C+1)            GENERATED captions (captions_generated = True)
 
 "[derived]" arrays may be left out ("compact", used for the embedded dataset to stay small): loading recomputes
@@ -92,7 +92,11 @@ class PreparedSplit:
                 motion=feats[self.feature_slice(i)],
                 texts=self.captions(i),
                 action=int(self.arrays["action"][i]),
-                meta={"content": self.label("content", i), "style": self.label("style", i), "captions_generated": True},
+                meta={
+                    "content": self.label("content", i),
+                    "style": self.label("style", i),
+                    "captions_generated": True,
+                },
             )
             for i in range(self.num_clips)
         ]
@@ -127,9 +131,7 @@ def fill_derived(arrays: dict[str, np.ndarray]) -> None:
             [features_from_canonical(arrays["joints"][offsets[i] : offsets[i + 1]]) for i in clips]
         )
     if "native_positions" not in arrays:
-        translations = np.broadcast_to(
-            arrays["native_offsets"], arrays["native_rotations"].shape[:-1] + (3,)
-        ).copy()
+        translations = np.repeat(arrays["native_offsets"], np.diff(offsets), axis=0)
         translations[:, 0] = arrays["native_root"]
         pos, _ = forward_kinematics(arrays["native_rotations"], translations, arrays["native_parents"])
         arrays["native_positions"] = pos.astype(np.float32)

@@ -1,0 +1,20 @@
+"""Errors shared by the dataset loaders, so callers can catch one type whatever the dataset."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class DatasetNotFoundError(FileNotFoundError):
+    """A dataset root, or a file/folder it must contain, is missing.
+
+    The message names the missing path, the layout the loader expects and where to get the data, because the
+    usual cause is a wrong `root` or an unprepared download, not a bug.
+    """
+
+    def __init__(self, missing: str | Path, *, dataset: str, layout: str, how_to_get: str, detail: str = ""):
+        self.path = Path(missing)  # not `filename`: setting that makes OSError print "[Errno None] None: ..."
+        self.dataset = dataset
+        lines = [f"{dataset}: {self.path} not found{': ' + detail if detail else ''}."]
+        lines += ["Expected layout:", layout.rstrip(), f"How to get it: {how_to_get}"]
+        super().__init__("\n".join(lines))

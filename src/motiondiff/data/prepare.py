@@ -1,0 +1,265 @@
+"""Raw motion capture -> a prepared dataset folder (see motiondiff.data.prepared for the format).
+
+    python -m motiondiff.data.prepare bandai --src bandai-ds1.zip --src bandai-ds2.zip --out data/bandai
+    python -m motiondiff.data.prepare bandai --src ... --out data/bandai_mini --per-group 1 --max-frames 120 --compact
+
+Every clip is read; each one that cannot be used is named with its reason; counts per split and label are printed
+and saved in report.json. Files are written to temporary names and renamed, so an interrupted run leaves either
+the previous dataset or the new one, never a mixture of half-written files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from motiondiff.data import bandai
+from motiondiff.data.bvh import BVHError, parse_bvh
+from motiondiff.data.captions import GENERATED_NOTE, generate_captions
+from motiondiff.data.features import mean_std
+from motiondiff.data.joint_map import JointMap
+from motiondiff.data.prepared import SPLITS, atomic_save, fill_derived, save_split
+from motiondiff.data.processing import (
+    TARGET_FPS,
+    ClipError,
+    ProcessedClip,
+    most_active_window,
+    process_motion,
+)
+from motiondiff.data.sources import Source, SourceError
+from motiondiff.data.splits import stratified_split, stratified_subset
+
+
+class PrepareError(ValueError):
+    """A problem with the command's inputs or output folder, found before any work is done."""
+
+
+@dataclass
+class Job:
+    source: str
+    bvh_name: str
+    name: str
+    max_frames: int | None
+
+
+# ---- per-clip work (runs in worker processes) ----------------------------------------------------------------
+_SOURCES: dict[str, Source] = {}
+_JOINT_MAP: JointMap | None = None
+
+
+def _init_worker(map_name: str) -> None:
+    global _JOINT_MAP
+    _JOINT_MAP = JointMap.load(map_name)
+
+
+def _process(job: Job) -> ProcessedClip | str:
+    """The processed clip, or the reason it cannot be used."""
+    try:
+        source = _SOURCES.setdefault(job.source, Source(job.source))
+        motion = parse_bvh(source.read_text(job.bvh_name), source=job.bvh_name)
+        clip = process_motion(motion, _JOINT_MAP)
+        if job.max_frames is not None and len(clip.joints) > job.max_frames:
+            clip = process_motion(motion, _JOINT_MAP, window=most_active_window(clip.joints, job.max_frames))
+        return clip
+    except (BVHError, ClipError, SourceError) as err:
+        return str(err)
+
+
+# ---- the command -------------------------------------------------------------------------------------------------
+def check_output(out: Path, force: bool) -> None:
+    if out.exists() and not out.is_dir():
+        raise PrepareError(f"--out {out} is a file, not a folder; choose a folder path (it is created if missing)")
+    if out.is_dir() and (out / "meta.json").exists() and not force:
+        raise PrepareError(f"--out {out} already holds a prepared dataset; pass --force to replace it")
+    probe = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
+    if not os.access(probe, os.W_OK):
+        raise PrepareError(f"cannot write to {probe}; choose an --out folder you can write to")
+
+
+def prepare_bandai(
+    sources: list[str | Path],
+    out: str | Path,
+    per_group: int | None = None,
+    max_frames: int | None = None,
+    compact: bool = False,
+    seed: int = 0,
+    workers: int | None = None,
+    force: bool = False,
+    progress: bool = True,
+) -> dict:
+    """Prepare Bandai Namco releases into `out`; returns the report (also saved as report.json)."""
+    out = Path(out)
+    check_output(out, force)
+    joint_map = JointMap.load("bandai_to_smpl22")
+    clips, skipped = [], []
+    for path in sources:
+        found, bad = bandai.list_clips(Source(path))
+        clips += found
+        skipped += [(s.name, s.reason) for s in bad]
+    if not clips:
+        raise PrepareError("no usable clips in " + ", ".join(map(str, sources)))
+    groups = [(c.dataset, c.content, c.style) for c in clips]
+    if per_group is not None:
+        keep = stratified_subset([c.name for c in clips], groups, per_group, seed)
+        clips, groups = [clips[i] for i in keep], [groups[i] for i in keep]
+
+    jobs = [Job(str(c.source.path), c.bvh_name, c.name, max_frames) for c in clips]
+    results = _run(jobs, "bandai_to_smpl22", workers, progress)
+    kept = []
+    for clip, group, res in zip(clips, groups, results, strict=True):
+        if isinstance(res, str):
+            skipped.append((clip.name, res))
+        else:
+            kept.append((clip, group, res))
+    kept, skipped = _same_skeleton(kept, skipped)
+    split_of = stratified_split([c.name for c, _, _ in kept], [g for _, g, _ in kept], seed)
+
+    labels = {k: sorted({getattr(c, k) for c, _, _ in kept}) for k in ("dataset", "content", "style")}
+    out.mkdir(parents=True, exist_ok=True)
+    per_split = {s: [(c, r) for (c, _, r), sp in zip(kept, split_of, strict=True) if sp == s] for s in SPLITS}
+    arrays = {s: _split_arrays(per_split[s], labels, seed) for s in SPLITS}
+    mean, std = mean_std(arrays["train"]["features"])
+    for s in SPLITS:
+        save_split(out / f"{s}.npz", arrays[s], compact=compact)
+    for name, arr in (("Mean.npy", mean), ("Std.npy", std)):
+        atomic_save(out / name, lambda tmp, a=arr: np.save(open(tmp, "wb"), a), suffix=".npy")
+    report = _report(per_split, skipped, sources, joint_map, compact, per_group, max_frames, seed)
+    meta = {**{k: v for k, v in report.items() if k not in ("skipped",)}, "labels": labels, "fps": TARGET_FPS,
+            "captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}  # fmt: skip
+    for name, obj in (("report.json", report), ("meta.json", meta)):
+        atomic_save(out / name, lambda tmp, o=obj: Path(tmp).write_text(json.dumps(o, indent=1)), suffix=".json")
+    return report
+
+
+def _run(jobs: list[Job], map_name: str, workers: int | None, progress: bool) -> list:
+    workers = workers if workers is not None else min(4, os.cpu_count() or 1)
+    bar = dict(total=len(jobs), desc="prepare", unit="clip", disable=not progress)
+    if workers <= 1:
+        _init_worker(map_name)
+        return [_process(j) for j in tqdm(jobs, **bar)]
+    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(map_name,)) as pool:
+        return list(tqdm(pool.map(_process, jobs, chunksize=8), **bar))
+
+
+def _same_skeleton(kept, skipped):
+    """One joint hierarchy per dataset (bone lengths are stored per clip): clips with another one are skipped."""
+    if not kept:
+        return kept, skipped
+    ref = kept[0][2].native
+    same = [k for k in kept if k[2].native.same_topology(ref)]
+    skipped += [
+        (c.name, f"its joints/hierarchy differ from {kept[0][0].name}'s")
+        for c, _, r in kept
+        if not r.native.same_topology(ref)
+    ]
+    return same, skipped
+
+
+def _split_arrays(items: list[tuple[bandai.BandaiClip, ProcessedClip]], labels: dict, seed: int) -> dict:
+    if not items:
+        raise PrepareError("a split came out empty: too few clips were selected (raise --per-group)")
+    lengths = np.array([len(r.joints) for _, r in items])
+    captions = []
+    for c, r in items:
+        rng = np.random.default_rng(int.from_bytes(f"{seed}:{c.name}".encode()[:8].ljust(8, b"\0"), "little"))
+        captions.append(generate_captions(c.content, c.style, r.facts, rng))
+    native = items[0][1].native
+    arrays = {
+        "ids": np.array([c.name for c, _ in items]),
+        "lengths": lengths,
+        "frame_offsets": np.concatenate([[0], np.cumsum(lengths)]),
+        "joints": np.concatenate([r.joints for _, r in items]),
+        "native_rotations": np.concatenate([r.native_rotations for _, r in items]),
+        "native_root": np.concatenate([r.native_root for _, r in items]),
+        "native_joint_names": np.array(native.joint_names),
+        "native_parents": native.parents,
+        "native_offsets": np.stack([r.native.offsets for _, r in items]).astype(np.float32),
+        "captions": np.array([t for caps in captions for t in caps]),
+        "caption_offsets": np.concatenate([[0], np.cumsum([len(caps) for caps in captions])]),
+        "captions_generated": np.array(True),
+        "fps": np.array(TARGET_FPS),
+    }
+    for kind in ("dataset", "content", "style"):
+        arrays[kind] = np.array([labels[kind].index(getattr(c, kind)) for c, _ in items])
+        arrays[f"{kind}_names"] = np.array(labels[kind])
+    arrays["action"], arrays["action_names"] = arrays["content"], arrays["content_names"]
+    fill_derived(arrays)  # features and native positions, exactly as loading a compact file recomputes them
+    return arrays
+
+
+def _report(per_split, skipped, sources, joint_map, compact, per_group, max_frames, seed) -> dict:
+    def count(kind):
+        return {s: dict(sorted(Counter(getattr(c, kind) for c, _ in per_split[s]).items())) for s in SPLITS}
+
+    return {
+        "sources": [str(s) for s in sources],
+        "clips": {s: len(per_split[s]) for s in SPLITS},
+        "frames": {s: int(sum(len(r.joints) for _, r in per_split[s])) for s in SPLITS},
+        "per_dataset": count("dataset"),
+        "per_content": count("content"),
+        "per_style": count("style"),
+        "skipped": [{"clip": n, "reason": r} for n, r in skipped],
+        "joint_map": f"{joint_map.source}->{joint_map.target}",
+        "options": {"compact": compact, "per_group": per_group, "max_frames": max_frames, "seed": seed},
+    }
+
+
+def print_report(report: dict, out: Path) -> None:
+    total = sum(report["clips"].values())
+    print(f"\nprepared {total} clips into {out}  ({', '.join(f'{s} {n}' for s, n in report['clips'].items())})")
+    for kind in ("per_dataset", "per_content", "per_style"):
+        names = sorted({k for s in SPLITS for k in report[kind][s]})
+        print(f"\n{kind[4:]:<22}" + "".join(f"{s:>7}" for s in SPLITS))
+        for n in names:
+            print(f"  {n:<20}" + "".join(f"{report[kind][s].get(n, 0):>7}" for s in SPLITS))
+    print(f"\nskipped {len(report['skipped'])} clip(s)")
+    for item in report["skipped"]:
+        print(f"  {item['clip']}: {item['reason']}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m motiondiff.data.prepare", description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="dataset", required=True)
+    b = sub.add_parser("bandai", help="Bandai Namco Research Motion Dataset 1/2 (zips or unzipped folders)")
+    b.add_argument("--src", action="append", required=True, help="a release zip or folder (repeat for several)")
+    b.add_argument("--out", required=True, help="output folder")
+    b.add_argument("--per-group", type=int, help="keep at most N clips per dataset x content x style (subset)")
+    b.add_argument("--max-frames", type=int, help="crop longer clips to their most active N frames (at 20 fps)")
+    b.add_argument("--compact", action="store_true", help="leave out derived arrays (recomputed on load)")
+    b.add_argument("--seed", type=int, default=0)
+    b.add_argument("--workers", type=int, help="processes (default: up to 4)")
+    b.add_argument("--force", action="store_true", help="replace a prepared dataset already in --out")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        report = prepare_bandai(
+            args.src,
+            args.out,
+            args.per_group,
+            args.max_frames,
+            args.compact,
+            args.seed,
+            args.workers,
+            args.force,
+        )
+    except (PrepareError, SourceError, bandai.BandaiLayoutError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print_report(report, Path(args.out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
