@@ -7,6 +7,7 @@ mask [B,N] bool, length [B], text list[str], action [B] long, id list[str].
 from __future__ import annotations
 
 import abc
+import logging
 from pathlib import Path
 
 import lightning as L
@@ -16,6 +17,9 @@ from torch.utils.data import DataLoader, get_worker_info
 
 from motiondiff.data.datasets import MotionDataset, MotionRecord, collate_motion
 from motiondiff.data.humanml3d import HUMANML3D, KIT, OfficialLayout, load_official_split
+from motiondiff.data.prepared import load_split as load_prepared_split
+
+log = logging.getLogger(__name__)
 
 SplitData = tuple[list[MotionRecord], np.ndarray, np.ndarray]
 _STAGE_SPLITS = {"fit": ("train", "val"), "validate": ("val",), "test": ("test",), "predict": ("test",)}
@@ -181,3 +185,54 @@ class HumanML3DDataModule(OfficialLayoutDataModule):
 
 class KITDataModule(OfficialLayoutDataModule):
     layout = KIT
+
+
+class PreparedDataModule(MotionDataModule):
+    """A folder written by `python -m motiondiff.data.prepare` (Bandai, the embedded bandai_mini, BVH folders).
+
+    Clips shorter than `min_frames` are left out of training and evaluation (logged with their count); the
+    captions are GENERATED ones (see motiondiff.data.captions) and each record says so in its meta.
+    """
+
+    def __init__(
+        self,
+        root: str | Path,
+        batch_size: int = 64,
+        num_workers: int = 0,
+        max_frames: int = 196,
+        min_frames: int = 16,
+        unit_length: int = 1,
+        seed: int = 0,
+    ):
+        super().__init__(batch_size, num_workers, max_frames, unit_length, seed)
+        self.root = Path(root)
+        self.min_frames = min_frames
+        self.meta: dict = {}
+
+    def load_split(self, split: str) -> SplitData:
+        data = load_prepared_split(self.root, split)
+        self.meta = data.meta
+        records = [r for r in data.records() if r.length >= self.min_frames]
+        dropped = data.num_clips - len(records)
+        if dropped:
+            log.info("%s/%s: %d clip(s) shorter than %d frames left out", self.root, split, dropped, self.min_frames)
+        return records, data.mean, data.std
+
+    @property
+    def num_joints(self) -> int:
+        return 22
+
+    @property
+    def fps(self) -> float:
+        return 20.0
+
+    @property
+    def action_names(self) -> list[str]:
+        if not self.meta:
+            self.dataset("train")
+        return list(self.meta["labels"]["content"])
+
+
+def embedded_data_root() -> Path:
+    """data/bandai_mini of the source checkout: the small real dataset the project ships."""
+    return Path(__file__).resolve().parents[3] / "data" / "bandai_mini"

@@ -137,7 +137,39 @@ def prepare_bandai(
             "captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}  # fmt: skip
     for name, obj in (("report.json", report), ("meta.json", meta)):
         atomic_save(out / name, lambda tmp, o=obj: Path(tmp).write_text(json.dumps(o, indent=1)), suffix=".json")
+    _write_license_and_readme(out, sources, report)
     return report
+
+
+def _write_license_and_readme(out: Path, sources, report: dict) -> None:
+    """The data's license travels with every copy of it (CC BY-NC 4.0 requires the attribution)."""
+    for path in sources:
+        src = Source(path)
+        if src.exists("LICENSE"):
+            text = src.read_text("LICENSE")
+            atomic_save(out / "LICENSE", lambda tmp, t=text: Path(tmp).write_text(t), suffix="")
+            break
+    opts = report["options"]
+    cmd = "python -m motiondiff.data.prepare bandai " + " ".join(f"--src {Path(p).name}" for p in sources)
+    cmd += f" --out {out.name}"
+    cmd += "".join(f" --{k.replace('_', '-')} {opts[k]}" for k in ("per_group", "max_frames") if opts[k] is not None)
+    cmd += " --compact" * bool(opts["compact"]) + f" --seed {opts['seed']}"
+    clips = report["clips"]
+    text = f"""# {out.name}
+
+Real motion capture prepared by motiondiff from the Bandai Namco Research Motion Dataset 1 and 2.
+
+**Attribution:** {bandai.ATTRIBUTION}. The license is in [LICENSE](LICENSE) (non-commercial use only).
+
+- clips: {sum(clips.values())} (train {clips["train"]}, val {clips["val"]}, test {clips["test"]}), 20 fps, metres, y up
+- captions: **generated** from the labels and from what each motion measurably does; {GENERATED_NOTE}
+- format: see `motiondiff.data.prepared`; counts per label and every skipped clip: report.json
+
+Rebuilt with (from the folder holding the zips; in a motiondiff checkout `make data` runs it):
+
+    {cmd}
+"""
+    atomic_save(out / "README.md", lambda tmp: Path(tmp).write_text(text), suffix=".md")
 
 
 def _run(jobs: list[Job], map_name: str, workers: int | None, progress: bool) -> list:

@@ -45,6 +45,9 @@ def atomic_save(path: Path, save_fn, suffix: str) -> None:
     os.close(fd)
     try:
         save_fn(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600 files; give the usual permissions
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
