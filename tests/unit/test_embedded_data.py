@@ -34,7 +34,9 @@ def test_every_content_and_style_is_present():
         pairs |= set(zip(*[n.tolist() for n in names], strict=True))  # dataset x content x style
     report = json.loads((ROOT / "report.json").read_text())
     assert report["skipped"] == [] and len(pairs) == sum(report["clips"].values()) == 226
-    assert len(meta["labels"]["content"]) == 24  # 16 of ds1 + 10 of ds2, walk and run shared and "generated" in meta["captions"]
+    assert (
+        len(meta["labels"]["content"]) == 24
+    )  # 16 of ds1 + 10 of ds2, walk and run shared and "generated" in meta["captions"]
 
 
 def test_datamodule_batches():

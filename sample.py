@@ -1,0 +1,20 @@
+"""Generate motion: python sample.py text="a person walks forward" [num_samples=3 guidance=2.5 length=4 ...]"""
+
+import hydra
+
+from motiondiff.cli.common import quiet_tool_caches, register_resolvers, user_errors
+
+register_resolvers()
+quiet_tool_caches()
+
+
+@hydra.main(version_base="1.3", config_path="conf", config_name="sample")
+@user_errors
+def main(cfg):
+    from motiondiff.cli.sample import run
+
+    run(cfg)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,74 @@
+"""Shared CLI plumbing: config resolvers, user-error reporting, finding checkpoints."""
+
+from __future__ import annotations
+
+import functools
+import os
+import sys
+from pathlib import Path
+
+from omegaconf import DictConfig, OmegaConf
+
+REPO_DIR = Path(__file__).resolve().parents[3]
+
+
+class UsageError(ValueError):
+    """A mistake the user can fix (bad prompt, length, name, path); printed as one line, exit code 2."""
+
+
+def register_resolvers() -> None:
+    if not OmegaConf.has_resolver("repo_dir"):
+        OmegaConf.register_new_resolver("repo_dir", lambda: str(REPO_DIR))
+
+
+def quiet_tool_caches() -> None:
+    """Offline defaults and project-local caches for W&B, matplotlib and Hugging Face (never the user's home)."""
+    cache = Path(os.environ.get("MOTIONDIFF_CACHE_DIR", REPO_DIR / ".cache" / "motiondiff"))
+    os.environ.setdefault("WANDB_MODE", "offline")
+    os.environ.setdefault("WANDB_SILENT", "true")
+    os.environ.setdefault("WANDB_CACHE_DIR", str(cache / "wandb"))
+    os.environ.setdefault("WANDB_CONFIG_DIR", str(cache / "wandb"))
+    os.environ.setdefault("MPLCONFIGDIR", str(cache / "matplotlib"))
+    os.environ.setdefault("HF_HOME", str(cache / "huggingface"))
+    os.environ.setdefault("HF_HUB_OFFLINE", "1")
+    os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")
+
+
+def user_errors(fn):
+    """Report user errors as one clear line instead of a traceback."""
+    from motiondiff.data.errors import DatasetNotFoundError
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except (UsageError, DatasetNotFoundError) as err:
+            print(f"error: {err}", file=sys.stderr)
+            sys.exit(2)
+
+    return wrapper
+
+
+def to_dict(cfg: DictConfig | dict | None) -> dict | None:
+    """Plain containers (checkpoints store hyper-parameters that load with torch.load(weights_only=True))."""
+    if cfg is None:
+        return None
+    if isinstance(cfg, DictConfig):
+        return OmegaConf.to_container(cfg, resolve=True)  # type: ignore[return-value]
+    return dict(cfg)
+
+
+def find_checkpoint(spec: str, output_dir: str | Path) -> Path:
+    """A checkpoint path, or 'latest': the newest last.ckpt of a training run under output_dir/train."""
+    if spec != "latest":
+        path = Path(spec)
+        if not path.is_file():
+            raise UsageError(f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt> or checkpoint=latest")
+        return path
+    runs = sorted(Path(output_dir).glob("train*/**/checkpoints/last.ckpt"), key=lambda p: p.stat().st_mtime)
+    if not runs:
+        raise UsageError(
+            f"no trained checkpoint under {output_dir}/train*: train one first (`make train` or `python train.py`) "
+            "or pass checkpoint=<path to a .ckpt>"
+        )
+    return runs[-1]

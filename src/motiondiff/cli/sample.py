@@ -1,0 +1,167 @@
+"""`python sample.py ...`: generate motion from text, an action name or nothing, and write joints, features and
+stick-figure videos, plus results.json with what each sample measurably does."""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import torch
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig, ListConfig
+
+from motiondiff.cli.common import UsageError, find_checkpoint, to_dict
+from motiondiff.data.captions import measure
+from motiondiff.data.features import joints_from_features, skeleton_for_dim
+from motiondiff.lit.diffusion import MotionDiffusionModule
+
+MAX_TEXT_CHARS = 1000  # far beyond any caption the encoders were trained on (CLIP keeps 77 tokens)
+
+
+def load_module(path: Path, device: str = "cpu") -> MotionDiffusionModule:
+    module = MotionDiffusionModule.load_from_checkpoint(path, map_location=device, weights_only=True)
+    return module.eval()
+
+
+def check_text(text) -> str:
+    if not isinstance(text, str) or not text.strip():
+        raise UsageError("the text is empty: describe the motion, e.g. text='a person walks forward'")
+    text = " ".join(text.split())
+    if len(text) > MAX_TEXT_CHARS:
+        raise UsageError(
+            f"the text has {len(text)} characters; keep it under {MAX_TEXT_CHARS} (one motion description)"
+        )
+    return text
+
+
+def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str | None]:
+    """The prompts to generate for: texts, action names, or [None] for unconditioned generation."""
+    kind = module.condition_kind
+    given = [x for x in (cfg.text, cfg.prompts, cfg.prompts_file, cfg.action) if x is not None]
+    if len(given) > 1:
+        raise UsageError("give only one of text=, prompts=, prompts_file= or action=")
+    if kind == "none":
+        if given:
+            raise UsageError("this model is unconditioned: drop text=/prompts=/action=")
+        return [None]
+    if kind == "action":
+        if cfg.action is None:
+            raise UsageError(
+                f"this model is conditioned on actions: pass action=<one of {module.hparams.action_names}>"
+            )
+        names = [cfg.action] if isinstance(cfg.action, str) else list(cfg.action)
+        for name in names:
+            if name not in module.hparams.action_names:
+                raise UsageError(f"unknown action {name!r}; known actions: {', '.join(module.hparams.action_names)}")
+        return names
+    if cfg.prompts_file is not None:
+        path = Path(cfg.prompts_file)
+        if not path.is_file():
+            raise UsageError(f"prompts_file {path} not found")
+        texts = [line for line in path.read_text().splitlines() if line.strip()]
+        if not texts:
+            raise UsageError(f"prompts_file {path} has no prompts (one per line)")
+    elif cfg.prompts is not None:
+        texts = list(cfg.prompts) if isinstance(cfg.prompts, ListConfig | list) else [cfg.prompts]
+    elif cfg.text is not None:
+        texts = [cfg.text]
+    else:
+        raise UsageError(
+            "this model is text-conditioned: pass text='a person walks forward' (or prompts=/prompts_file=)"
+        )
+    return [check_text(t) for t in texts]
+
+
+def num_frames(cfg: DictConfig, module: MotionDiffusionModule) -> int:
+    fps, max_frames = module.hparams.fps, module.hparams.max_frames
+    frames = cfg.frames if cfg.frames is not None else round(float(cfg.length) * fps)
+    if not isinstance(frames, int) or frames <= 0:
+        raise UsageError(f"length must be positive, got {cfg.length if cfg.frames is None else cfg.frames}")
+    if frames > max_frames:
+        raise UsageError(
+            f"{frames} frames ({frames / fps:g} s) is longer than this model's maximum of {max_frames} frames "
+            f"({max_frames / fps:g} s); ask for a shorter length"
+        )
+    return frames
+
+
+def make_condition(module: MotionDiffusionModule, prompt: str | None, n: int):
+    if module.condition_kind == "text":
+        from motiondiff.cli.train import text_encoder_kwargs
+        from motiondiff.text.encoders import build_text_encoder
+
+        if not hasattr(module, "_encoder"):
+            module._encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
+        return module._encoder.encode([prompt]).to(module.device).expand(n, -1)
+    if module.condition_kind == "action":
+        return torch.full((n,), module.hparams.action_names.index(prompt), dtype=torch.long, device=module.device)
+    return None
+
+
+def slug(text: str | None) -> str:
+    return re.sub(r"[^a-z0-9]+", "_", (text or "unconditioned").lower()).strip("_")[:48] or "prompt"
+
+
+def run(cfg: DictConfig) -> Path:
+    out = Path(HydraConfig.get().runtime.output_dir)
+    ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
+    module = load_module(ckpt, cfg.device)
+    prompts = collect_prompts(cfg, module)
+    frames = num_frames(cfg, module)
+    if cfg.num_samples < 1:
+        raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
+    if cfg.guidance < 0:
+        raise UsageError(f"guidance must be >= 0, got {cfg.guidance}")
+    generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
+    results = []
+    for prompt in prompts:
+        cond = make_condition(module, prompt, cfg.num_samples)
+        print(f"sampling {cfg.num_samples} x {frames} frames for {prompt or 'unconditioned'!r}")
+        feats = module.sample(
+            cond,
+            torch.full((cfg.num_samples,), frames),
+            guidance=float(cfg.guidance),
+            sampler=cfg.sampler.name,
+            steps=cfg.sampler.steps,
+            eta=float(cfg.sampler.eta),
+            generator=generator,
+            progress=True,
+        )
+        feats = module.denormalise(feats).cpu().numpy()
+        results += save_samples(out, prompt, feats, module, cfg.render)
+    summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": cfg.guidance, "samples": results}
+    (out / "results.json").write_text(json.dumps(summary, indent=1))
+    print(f"\n{len(results)} sample(s) written to {out}")
+    return out
+
+
+def save_samples(out: Path, prompt: str | None, feats: np.ndarray, module, render: str) -> list[dict]:
+    from motiondiff.export.render import render_motion
+
+    skeleton = skeleton_for_dim(feats.shape[-1])
+    fps = module.hparams.fps
+    rows = []
+    for k, f in enumerate(feats):
+        joints = joints_from_features(f)
+        stem = out / f"{slug(prompt)}_{k:02d}"
+        np.save(f"{stem}_joints.npy", joints)
+        np.save(f"{stem}_features.npy", f.astype(np.float32))
+        video = None
+        if render != "none":
+            video = render_motion(joints, skeleton, f"{stem}.{render}", title=prompt or "unconditioned", fps=fps)
+        facts = measure(joints, fps)
+        speed = float(np.linalg.norm(np.diff(joints, axis=0), axis=-1).mean() * fps)
+        rows.append(
+            {
+                "prompt": prompt,
+                "index": k,
+                "joints": f"{stem}_joints.npy",
+                "video": str(video) if video else None,
+                "mean_joint_speed": speed,
+                **asdict(facts),
+            }  # fmt: skip
+        )
+    return rows

@@ -1,0 +1,86 @@
+"""`python train.py ...`: build the datamodule, text features, model, loggers and callbacks from the Hydra config."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import lightning as L
+from hydra.core.hydra_config import HydraConfig
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf
+
+from motiondiff.cli.common import UsageError, to_dict
+from motiondiff.data.datamodules import MotionDataModule
+from motiondiff.lit.diffusion import MotionDiffusionModule
+
+log = logging.getLogger(__name__)
+
+
+def build_text_table(cfg: DictConfig, dm: MotionDataModule):
+    """Features of every caption of the train and val splits, encoded once and cached on disk."""
+    from motiondiff.text.cache import TextEmbeddingCache
+    from motiondiff.text.encoders import build_text_encoder
+
+    encoder = build_text_encoder(**text_encoder_kwargs(cfg.text_encoder))
+    cache = TextEmbeddingCache(encoder, Path(cfg.paths.cache_dir) / "text")
+    texts = sorted({t for split in ("train", "val") for rec in dm.dataset(split).records for t in rec.texts})
+    if not texts:
+        raise UsageError(f"dataset {cfg.dataset.name} has no captions: use condition=action or condition=none")
+    return cache.table(texts)
+
+
+def text_encoder_kwargs(cfg_text: DictConfig | dict) -> dict:
+    return {k: v for k, v in to_dict(cfg_text).items() if k not in ("dim",)}
+
+
+def build_module(cfg: DictConfig, dm: MotionDataModule) -> MotionDiffusionModule:
+    kind = cfg.condition.kind
+    action_names = list(getattr(dm, "action_names", None) or []) if kind == "action" else None
+    if kind == "action" and not action_names:
+        raise UsageError(f"dataset {cfg.dataset.name} has no action labels: use condition=text or condition=none")
+    ds = dm.dataset("train")
+    return MotionDiffusionModule(
+        feature_dim=dm.feature_dim,
+        model=to_dict(cfg.model),
+        backbone=to_dict(cfg.backbone),
+        condition=to_dict(cfg.condition),
+        diffusion=to_dict(cfg.diffusion),
+        optim=to_dict(cfg.optim),
+        mean=ds.mean.tolist(),
+        std=ds.std.tolist(),
+        max_frames=dm.max_frames,
+        fps=dm.fps,
+        num_joints=dm.num_joints,
+        action_names=action_names,
+        text_encoder=to_dict(cfg.text_encoder) if kind == "text" else None,
+        dataset=cfg.dataset.name,
+    )
+
+
+def run(cfg: DictConfig) -> Path:
+    L.seed_everything(cfg.seed, workers=True)
+    out = Path(HydraConfig.get().runtime.output_dir)
+    dm: MotionDataModule = instantiate(cfg.dataset.datamodule)
+    dm.setup("fit")
+    module = build_module(cfg, dm)
+    if cfg.condition.kind == "text":
+        module.set_text_table(*build_text_table(cfg, dm))
+    loggers = [instantiate(c) for c in (cfg.logger or {}).values()]
+    callbacks = [instantiate(c) for c in cfg.callbacks.values()]
+    if cfg.ema:
+        from lightning.pytorch.callbacks import EMAWeightAveraging
+
+        callbacks.append(EMAWeightAveraging(decay=cfg.ema_decay))
+    trainer = L.Trainer(
+        **OmegaConf.to_container(cfg.trainer), logger=loggers, callbacks=callbacks, default_root_dir=out
+    )
+    n_params = sum(p.numel() for p in module.denoiser.parameters() if p.requires_grad)
+    log.info("denoiser: %.2f M trainable parameters; outputs in %s", n_params / 1e6, out)
+    ckpt = cfg.ckpt_path
+    if ckpt is not None and not Path(ckpt).is_file():
+        raise UsageError(f"ckpt_path={ckpt} not found; pass the last.ckpt of the run to resume")
+    trainer.fit(module, datamodule=dm, ckpt_path=ckpt)
+    last = out / "checkpoints" / "last.ckpt"
+    print(f"\ntrained {trainer.global_step} steps; checkpoint: {last}")
+    return last

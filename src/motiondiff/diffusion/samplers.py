@@ -1,0 +1,150 @@
+"""Reverse-process samplers as plain loops: DDPM (ancestral, optionally respaced) and DDIM.
+
+``model_fn(x_t, t) -> raw network output`` (of the diffusion's prediction type), t a long tensor (B,) of ORIGINAL step
+indices even when fewer steps are taken. Masks, conditions and guidance live in model_fn (see ``guidance.py``).
+``x0_hook(x0_hat, t) -> x0_hat`` runs on every step's x̂0 (t the original step index, decreasing): editing overwrites
+the known part there. No host sync inside the loops: per-step scalars come from float64 tables read once up front.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+import torch
+from tqdm.auto import tqdm
+
+from motiondiff.diffusion.process import GaussianDiffusion
+
+ModelFn = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
+X0Hook = Callable[[torch.Tensor, int], torch.Tensor]
+
+
+def select_timesteps(num_steps: int, steps: int | None = None) -> list[int]:
+    """``steps`` evenly spaced indices in [0, T−1], ascending, always including 0 and T−1 (one step: just T−1).
+
+    k_i = round(i (T−1)/(S−1)); the spacing is ≥ 1 for S ≤ T, so the indices are distinct. ``None`` keeps all T.
+    """
+    steps = num_steps if steps is None else int(steps)
+    if not 1 <= steps <= num_steps:
+        raise ValueError(f"steps must be in [1, {num_steps}] (the process has {num_steps} steps), got {steps}")
+    if steps == 1:
+        return [num_steps - 1]
+    return [(2 * i * (num_steps - 1) + steps - 1) // (2 * (steps - 1)) for i in range(steps)]
+
+
+def _initial_noise(
+    shape: Sequence[int],
+    noise: torch.Tensor | None,
+    generator: torch.Generator | None,
+    device: torch.device | str | None,
+    dtype: torch.dtype | None,
+) -> torch.Tensor:
+    if noise is not None:
+        if tuple(noise.shape) != tuple(shape):
+            raise ValueError(f"noise has shape {tuple(noise.shape)} but shape={tuple(shape)} was asked for")
+        return noise.to(device=device or noise.device, dtype=dtype or noise.dtype)
+    if device is None and generator is not None:
+        device = generator.device
+    return torch.randn(tuple(shape), generator=generator, device=device, dtype=dtype or torch.float32)
+
+
+def _predict_x0(
+    diffusion: GaussianDiffusion,
+    model_fn: ModelFn,
+    x: torch.Tensor,
+    t_model: torch.Tensor,
+    t_proc: torch.Tensor,
+    clip_x0: float | None,
+    x0_hook: X0Hook | None,
+    t_index: int,
+) -> torch.Tensor:
+    x0 = diffusion.to_x0(model_fn(x, t_model), x, t_proc)
+    if clip_x0 is not None:
+        x0 = x0.clamp(-clip_x0, clip_x0)
+    return x0 if x0_hook is None else x0_hook(x0, t_index)
+
+
+@torch.inference_mode()
+def ddpm_sample(
+    diffusion: GaussianDiffusion,
+    model_fn: ModelFn,
+    shape: Sequence[int],
+    *,
+    noise: torch.Tensor | None = None,
+    generator: torch.Generator | None = None,
+    x0_hook: X0Hook | None = None,
+    clip_x0: float | None = None,
+    progress: bool = False,
+    steps: int | None = None,
+    device: torch.device | str | None = None,
+    dtype: torch.dtype | None = None,
+) -> torch.Tensor:
+    """Ancestral sampling (Ho et al. 2020; MDM): x̂0 = to_x0(model_fn(x_t, t)), then x_{t−1} ~ q(x_{t−1} | x_t, x̂0).
+
+    ``steps=S < T`` samples the respaced process (``GaussianDiffusion.respace`` on ``select_timesteps``).
+    ``noise`` is x_T (else drawn from ``generator``); the last step adds no noise, so the result is the last x̂0.
+    """
+    kept = select_timesteps(diffusion.num_steps, steps)
+    proc = diffusion if len(kept) == diffusion.num_steps else diffusion.respace(kept)
+    x = _initial_noise(shape, noise, generator, device, dtype)
+    batch = x.shape[0]
+    for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDPM", disable=not progress, leave=False):
+        t_model = torch.full((batch,), kept[i], dtype=torch.long, device=x.device)
+        t_proc = t_model if proc is diffusion else torch.full((batch,), i, dtype=torch.long, device=x.device)
+        x0 = _predict_x0(proc, model_fn, x, t_model, t_proc, clip_x0, x0_hook, kept[i])
+        mean, _, log_var = proc.q_posterior(x0, x, t_proc)
+        if i == 0:
+            x = mean
+        else:
+            z = torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
+            x = mean + (0.5 * log_var).exp() * z
+    return x
+
+
+def ddim_coefficients(alpha_bar: float, alpha_bar_prev: float, eta: float) -> tuple[float, float, float]:
+    """DDIM step x_prev = c_x0 · x̂0 + c_eps · ε̂ + σ z (Song et al. 2021, eq. 12 and 16), returns (c_x0, c_eps, σ).
+
+    σ = η √((1 − ᾱ_prev)/(1 − ᾱ_t)) √(1 − ᾱ_t/ᾱ_prev), c_x0 = √ᾱ_prev, c_eps = √(1 − ᾱ_prev − σ²).
+    With consecutive steps and η = 1, σ² is the DDPM posterior variance β̃_t and the mean is the posterior mean.
+    """
+    sigma = (
+        eta * math.sqrt((1 - alpha_bar_prev) / (1 - alpha_bar)) * math.sqrt(max(1 - alpha_bar / alpha_bar_prev, 0.0))
+    )
+    return math.sqrt(alpha_bar_prev), math.sqrt(max(1 - alpha_bar_prev - sigma**2, 0.0)), sigma
+
+
+@torch.inference_mode()
+def ddim_sample(
+    diffusion: GaussianDiffusion,
+    model_fn: ModelFn,
+    shape: Sequence[int],
+    *,
+    steps: int = 50,
+    eta: float = 0.0,
+    noise: torch.Tensor | None = None,
+    generator: torch.Generator | None = None,
+    x0_hook: X0Hook | None = None,
+    clip_x0: float | None = None,
+    progress: bool = False,
+    device: torch.device | str | None = None,
+    dtype: torch.dtype | None = None,
+) -> torch.Tensor:
+    """DDIM on ``select_timesteps(T, steps)`` from T−1 down to 0; η = 0 is deterministic, η = 1 is DDPM-like.
+
+    ε̂ is recomputed from the (clipped, hooked) x̂0, so edits made in ``x0_hook`` carry into the next x_t.
+    The step from t = 0 goes to ᾱ_prev = 1, i.e. returns x̂0.
+    """
+    kept = select_timesteps(diffusion.num_steps, steps)
+    alpha_bar = diffusion.alphas_cumprod.tolist()
+    x = _initial_noise(shape, noise, generator, device, dtype)
+    batch = x.shape[0]
+    for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDIM", disable=not progress, leave=False):
+        t = torch.full((batch,), kept[i], dtype=torch.long, device=x.device)
+        x0 = _predict_x0(diffusion, model_fn, x, t, t, clip_x0, x0_hook, kept[i])
+        eps = diffusion.eps_from_x0(x0, x, t)
+        c_x0, c_eps, sigma = ddim_coefficients(alpha_bar[kept[i]], alpha_bar[kept[i - 1]] if i > 0 else 1.0, eta)
+        x = c_x0 * x0 + c_eps * eps
+        if sigma > 0:
+            x = x + sigma * torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
+    return x

@@ -1,0 +1,111 @@
+"""Stick-figure animations (MP4 or GIF) of joint positions, with a ground grid and the root's trajectory trail.
+
+MP4 uses the ffmpeg binary bundled by the `imageio-ffmpeg` wheel (no system ffmpeg needed); GIF uses Pillow.
+Files are written to a temporary name and renamed, so a failed render leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from motiondiff.skeleton import Skeleton
+
+# Left limbs blue, right limbs red, torso dark: the usual convention in motion papers.
+_COLORS = {"left": "#1f77b4", "right": "#d62728", "torso": "#333333"}
+
+
+def _chain_color(chain: tuple[int, ...], skeleton: Skeleton) -> str:
+    for side in ("left", "right"):
+        limb = set(skeleton.parts.get(f"{side}_arm", ())) | set(skeleton.parts.get(f"{side}_leg", ()))
+        if limb & set(chain[1:]):
+            return _COLORS[side]
+    return _COLORS["torso"]
+
+
+def render_motion(
+    joints: np.ndarray, skeleton: Skeleton, path: str | Path, title: str = "", fps: float = 20.0, dpi: int = 80
+) -> Path:
+    """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib import animation
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".mp4", ".gif"):
+        raise ValueError(f"cannot render to {path.name}: use a .mp4 or .gif file name")
+    joints = np.asarray(joints, dtype=np.float64)
+    if joints.ndim != 3 or joints.shape[1:] != (skeleton.num_joints, 3):
+        raise ValueError(f"expected joints (frames, {skeleton.num_joints}, 3), got {joints.shape}")
+    if not path.parent.is_dir():
+        raise NotADirectoryError(f"cannot write {path}: the folder {path.parent} does not exist")
+
+    fig = plt.figure(figsize=(4, 4), dpi=dpi)
+    ax = fig.add_subplot(projection="3d")
+    trail = joints[:, 0, [0, 2]]
+    lo, hi = joints.reshape(-1, 3).min(0), joints.reshape(-1, 3).max(0)
+    centre = (lo + hi) / 2
+    radius = max(1.0, float((hi - lo)[[0, 2]].max()) / 2 + 0.3)
+    chains = [(c, _chain_color(c, skeleton)) for c in skeleton.kinematic_chains]
+
+    def draw(i: int):
+        ax.clear()
+        ax.set_title(_wrap(title), fontsize=8)
+        ax.set_xlim(centre[0] - radius, centre[0] + radius)
+        ax.set_ylim(centre[2] - radius, centre[2] + radius)
+        ax.set_zlim(0, max(2.0, hi[1] + 0.1))
+        ax.set_axis_off()
+        ax.view_init(elev=20, azim=-60)
+        grid = np.arange(np.floor(centre[0] - radius), np.ceil(centre[0] + radius) + 0.5, 0.5)
+        grid_z = np.arange(np.floor(centre[2] - radius), np.ceil(centre[2] + radius) + 0.5, 0.5)
+        for g in grid:  # ground grid (matplotlib's y is our z: the ground is its x-y plane)
+            ax.plot([g, g], [grid_z[0], grid_z[-1]], [0, 0], color="#dddddd", lw=0.5)
+        for g in grid_z:
+            ax.plot([grid[0], grid[-1]], [g, g], [0, 0], color="#dddddd", lw=0.5)
+        ax.plot(trail[: i + 1, 0], trail[: i + 1, 1], np.zeros(i + 1), color="#ff9900", lw=1.5)
+        frame = joints[i]
+        for chain, color in chains:
+            ax.plot(frame[list(chain), 0], frame[list(chain), 2], frame[list(chain), 1], color=color, lw=2.5)
+        return []
+
+    anim = animation.FuncAnimation(fig, draw, frames=len(joints), interval=1000 / fps)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        anim.save(tmp, writer=_writer(suffix, fps), dpi=dpi)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _writer(suffix: str, fps: float):
+    from matplotlib import animation, rcParams
+
+    if suffix == ".gif":
+        return animation.PillowWriter(fps=fps)
+    import imageio_ffmpeg
+
+    rcParams["animation.ffmpeg_path"] = imageio_ffmpeg.get_ffmpeg_exe()
+    return animation.FFMpegWriter(fps=fps, codec="libx264", extra_args=["-pix_fmt", "yuv420p"])
+
+
+def _wrap(text: str, width: int = 48) -> str:
+    words, lines, line = text.split(), [], ""
+    for w in words:
+        if len(line) + len(w) + 1 > width and line:
+            lines.append(line)
+            line = w
+        else:
+            line = f"{line} {w}".strip()
+    return "\n".join(lines + [line] if line else lines)

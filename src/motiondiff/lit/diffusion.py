@@ -1,0 +1,148 @@
+"""The LightningModule of MDM / vvMDM: a denoiser trained with a Gaussian diffusion, sampled with guidance.
+
+The module owns what a checkpoint must carry to generate motion without the dataset: the denoiser, the diffusion
+settings, the feature Mean/Std, the action names and the text encoder's name. Text conditions are looked up in a
+table of pre-computed caption features (`set_text_table`); the frozen text encoder never runs in a training step.
+"""
+
+from __future__ import annotations
+
+import lightning as L
+import torch
+
+from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, guided_model_fn, make_betas
+from motiondiff.models.backbones import build_backbone
+from motiondiff.models.conditioning import build_condition
+from motiondiff.models.denoiser import MDMDenoiser
+
+
+class MotionDiffusionModule(L.LightningModule):
+    def __init__(
+        self,
+        feature_dim: int,
+        model: dict,
+        backbone: dict,
+        condition: dict,
+        diffusion: dict,
+        optim: dict,
+        mean: list[float],
+        std: list[float],
+        max_frames: int,
+        fps: float,
+        num_joints: int,
+        action_names: list[str] | None = None,
+        text_encoder: dict | None = None,
+        dataset: str = "",
+    ):
+        super().__init__()
+        self.save_hyperparameters()
+        self.condition_kind = condition["kind"]
+        self.cond_drop_prob = float(condition.get("drop_prob", 0.1))
+        cond_dim = text_encoder["dim"] if self.condition_kind == "text" else None
+        self.denoiser = MDMDenoiser(
+            feature_dim=feature_dim,
+            d_model=model["d_model"],
+            backbone=build_backbone(backbone["name"], **_backbone_kwargs(model, backbone)),
+            condition=build_condition(
+                self.condition_kind,
+                model["d_model"],
+                cond_dim=cond_dim,
+                num_actions=len(action_names or []) or None,
+            ),
+        )
+        self.diffusion = GaussianDiffusion(
+            make_betas(diffusion["schedule"], diffusion["steps"]),
+            prediction=diffusion["prediction"],
+            weighting=diffusion.get("weighting"),  # None: the prediction type's default (abar_t for v)
+        )
+        self.register_buffer("mean", torch.tensor(mean, dtype=torch.float32))
+        self.register_buffer("std", torch.tensor(std, dtype=torch.float32))
+        # Caption features of the training data; rebuilt from the text cache at setup, not stored in checkpoints.
+        self.register_buffer("text_table", torch.zeros(0, cond_dim or 0), persistent=False)
+        self.text_index: dict[str, int] = {}
+
+    # ---- conditions ---------------------------------------------------------------------------------------------
+    def set_text_table(self, table: torch.Tensor, index: dict[str, int]) -> None:
+        self.text_table = table.to(self.device, torch.float32)
+        self.text_index = dict(index)
+
+    def batch_condition(self, batch: dict):
+        """The raw condition of a training batch: caption features by table lookup, action ids, or None."""
+        if self.condition_kind == "text":
+            try:
+                rows = [self.text_index[t] for t in batch["text"]]
+            except KeyError as err:
+                raise RuntimeError(f"caption {err} has no pre-computed feature: call set_text_table first") from None
+            return self.text_table[torch.tensor(rows, device=self.device)]
+        if self.condition_kind == "action":
+            return batch["action"]
+        return None
+
+    # ---- training -----------------------------------------------------------------------------------------------
+    def _loss(self, batch: dict, drop_prob: float) -> torch.Tensor:
+        x0, mask = batch["motion"], batch["mask"]
+        b = x0.shape[0]
+        t = torch.randint(0, self.diffusion.num_steps, (b,), device=x0.device)
+        noise = torch.randn_like(x0)
+        x_t = self.diffusion.q_sample(x0, t, noise)
+        drop = torch.rand(b, device=x0.device) < drop_prob
+        out = self.denoiser(x_t, t, cond=self.batch_condition(batch), mask=mask, drop_cond=drop)
+        return self.diffusion.loss(out, x0, noise, t, mask=mask)
+
+    def training_step(self, batch: dict, batch_idx: int) -> torch.Tensor:
+        loss = self._loss(batch, self.cond_drop_prob)
+        self.log("train/loss", loss, prog_bar=True, batch_size=batch["motion"].shape[0])
+        return loss
+
+    def validation_step(self, batch: dict, batch_idx: int) -> None:
+        # A fixed generator per batch makes the validation loss comparable between evaluations.
+        state = torch.get_rng_state()
+        torch.manual_seed(batch_idx)
+        loss = self._loss(batch, 0.0)
+        torch.set_rng_state(state)
+        self.log("val/loss", loss, prog_bar=True, batch_size=batch["motion"].shape[0], sync_dist=True)
+
+    def configure_optimizers(self):
+        o = self.hparams.optim
+        return torch.optim.AdamW(self.parameters(), lr=o["lr"], weight_decay=o.get("weight_decay", 0.0))
+
+    # ---- sampling -----------------------------------------------------------------------------------------------
+    @torch.inference_mode()
+    def sample(
+        self,
+        cond,
+        lengths: torch.Tensor,
+        guidance: float = 2.5,
+        sampler: str = "ddim",
+        steps: int | None = 50,
+        eta: float = 0.0,
+        generator: torch.Generator | None = None,
+        progress: bool = False,
+        x0_hook=None,
+    ) -> torch.Tensor:
+        """Generate normalised features (B, max(lengths), D); frames past each length are padding."""
+        self.eval()
+        b, n = len(lengths), int(lengths.max())
+        mask = torch.arange(n, device=self.device)[None] < lengths.to(self.device)[:, None]
+        scale = guidance if cond is not None else 1.0
+        fn = guided_model_fn(self.denoiser, cond, scale, mask=mask)
+        shape = (b, n, self.hparams.feature_dim)
+        if sampler == "ddim":
+            return ddim_sample(
+                self.diffusion, fn, shape, steps=steps or 50, eta=eta, generator=generator,
+                x0_hook=x0_hook, progress=progress, device=self.device,
+            )  # fmt: skip
+        if sampler == "ddpm":
+            return ddpm_sample(
+                self.diffusion, fn, shape, steps=steps, generator=generator, x0_hook=x0_hook, progress=progress,
+                device=self.device,
+            )  # fmt: skip
+        raise ValueError(f"unknown sampler {sampler!r}; choose ddpm or ddim")
+
+    def denormalise(self, features: torch.Tensor) -> torch.Tensor:
+        return features * self.std + self.mean
+
+
+def _backbone_kwargs(model: dict, backbone: dict) -> dict:
+    size = {k: model[k] for k in ("d_model", "num_layers", "num_heads", "ff_size", "dropout", "activation")}
+    return {**size, **{k: v for k, v in backbone.items() if k != "name"}}

@@ -1,0 +1,45 @@
+"""MDM's default backbone: the time/condition token is prepended to the frames and a Transformer encoder reads both."""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor, nn
+
+from motiondiff.models.embeddings import SinusoidalPositionalEncoding
+
+
+class TransEncBackbone(nn.Module):
+    """[token, frames] + sinusoidal positions -> nn.TransformerEncoder -> frames (the token's output is dropped).
+
+    Post-norm layers as in MDM (PyTorch defaults). batch_first=True lets PyTorch use its fused inference fast path
+    and scaled_dot_product_attention.
+    """
+
+    def __init__(
+        self,
+        d_model: int,
+        num_layers: int,
+        num_heads: int,
+        ff_size: int,
+        dropout: float = 0.1,
+        activation: str = "gelu",
+        max_len: int = 5000,
+    ):
+        super().__init__()
+        if d_model % num_heads:
+            raise ValueError(f"d_model={d_model} must be divisible by num_heads={num_heads}")
+        self.d_model = d_model
+        self.pos_encoding = SinusoidalPositionalEncoding(d_model, max_len=max_len, dropout=dropout)
+        layer = nn.TransformerEncoderLayer(
+            d_model, num_heads, dim_feedforward=ff_size, dropout=dropout, activation=activation, batch_first=True
+        )
+        # No nested tensors: they are a prototype API (warns on every padded eval call); the fused fast path stays.
+        self.encoder = nn.TransformerEncoder(layer, num_layers=num_layers, enable_nested_tensor=False)
+
+    def forward(self, h: Tensor, token: Tensor, mask: Tensor | None = None) -> Tensor:
+        seq = self.pos_encoding(torch.cat([token.unsqueeze(1), h], dim=1))  # positions cover the token too (MDM)
+        pad = None
+        if mask is not None and not bool(mask.all()):  # no mask at all keeps the cheaper unmasked attention
+            keep = torch.cat([mask.new_ones(mask.shape[0], 1), mask.to(torch.bool)], dim=1)
+            pad = ~keep  # True = ignore this key
+        return self.encoder(seq, src_key_padding_mask=pad)[:, 1:]
