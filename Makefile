@@ -23,8 +23,14 @@ $(VENV)/.installed: pyproject.toml requirements.lock
 	$(PY) -m pip install --quiet --progress-bar off -c requirements.lock -e '.[dev]'
 	@touch $@
 
+# Train the default model on the embedded data, sample a few prompts, and check it does what they say.
+PROMPTS := [a person walks forward, a person raises both hands, a person runs, a person bows]
 train: setup
-	$(PY) -m motiondiff.cli.quickstart
+	$(PY) train.py
+	$(PY) sample.py "prompts=$(PROMPTS)" num_samples=2 length=4 render=mp4
+	$(PY) -m motiondiff.eval.behaviour num_samples=10
+	@echo "checkpoint: $$(ls -t outputs/train/*/checkpoints/last.ckpt | head -1)"
+	@echo "samples:    $$(ls -td outputs/sample/*/ | head -1)"
 
 test: setup
 	$(PY) -m pytest -q
@@ -37,10 +43,10 @@ format: setup
 	$(VENV)/bin/ruff format src tests
 	$(VENV)/bin/ruff check --fix src tests
 
-# Rebuild the embedded dataset from the Bandai Namco zips (every content x style, one clip each, <= 6 s).
+# Rebuild the embedded dataset from the Bandai Namco zips (every content x style, two clips each where there are two, <= 4 s).
 data: setup
 	$(PY) -m motiondiff.data.prepare bandai --src $(BANDAI)/bandai-ds1.zip --src $(BANDAI)/bandai-ds2.zip \
-		--out data/bandai_mini --per-group 1 --max-frames 120 --compact --seed 0 --force
+		--out data/bandai_mini --per-group 2 --max-frames 80 --compact --seed 0 --force
 
 lock: setup
 	( echo "# Exact versions of every installed package (pip freeze of a working .venv); used as pip constraints by the Makefile."; \

@@ -95,7 +95,7 @@ def make_condition(module: MotionDiffusionModule, prompt: str | None, n: int):
 
         if not hasattr(module, "_encoder"):
             module._encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
-        return module._encoder.encode([prompt]).to(module.device).expand(n, -1)
+        return module.prepare_text(module._encoder.encode([prompt]).to(module.device)).expand(n, -1)
     if module.condition_kind == "action":
         return torch.full((n,), module.hparams.action_names.index(prompt), dtype=torch.long, device=module.device)
     return None
@@ -115,6 +115,11 @@ def run(cfg: DictConfig) -> Path:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     if cfg.guidance < 0:
         raise UsageError(f"guidance must be >= 0, got {cfg.guidance}")
+    steps = cfg.steps if cfg.steps is not None else cfg.sampler.steps
+    if steps is not None and not 1 <= steps <= module.diffusion.num_steps:
+        raise UsageError(
+            f"steps must be between 1 and the model's {module.diffusion.num_steps} diffusion steps, got {steps}"
+        )
     generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
     results = []
     for prompt in prompts:
@@ -125,7 +130,7 @@ def run(cfg: DictConfig) -> Path:
             torch.full((cfg.num_samples,), frames),
             guidance=float(cfg.guidance),
             sampler=cfg.sampler.name,
-            steps=cfg.sampler.steps,
+            steps=steps,
             eta=float(cfg.sampler.eta),
             generator=generator,
             progress=True,

@@ -7,6 +7,8 @@ table of pre-computed caption features (`set_text_table`); the frozen text encod
 
 from __future__ import annotations
 
+import math
+
 import lightning as L
 import torch
 
@@ -60,11 +62,26 @@ class MotionDiffusionModule(L.LightningModule):
         # Caption features of the training data; rebuilt from the text cache at setup, not stored in checkpoints.
         self.register_buffer("text_table", torch.zeros(0, cond_dim or 0), persistent=False)
         self.text_index: dict[str, int] = {}
+        # Sentence features of captions share one dominant direction (cosine 0.7-0.8 between "raises both hands"
+        # and "raises the right hand"); centring them on the training captions and rescaling to unit mean norm makes
+        # the differences between captions what the condition projection sees. Stored, so prompts get the same map.
+        self.center_text = bool(condition.get("center_text", True))
+        self.register_buffer("text_center", torch.zeros(cond_dim or 0))
+        self.register_buffer("text_scale", torch.ones(()))
 
     # ---- conditions ---------------------------------------------------------------------------------------------
     def set_text_table(self, table: torch.Tensor, index: dict[str, int]) -> None:
-        self.text_table = table.to(self.device, torch.float32)
+        """Features (K, C) of every training caption and caption -> row; fixes the centring on first use."""
+        table = table.to(self.device, torch.float32)
+        if self.center_text and not bool(self.text_center.any()):
+            self.text_center = table.mean(0)
+            self.text_scale = (table - self.text_center).norm(dim=1).mean().clamp_min(1e-6)
+        self.text_table = self.prepare_text(table)
         self.text_index = dict(index)
+
+    def prepare_text(self, features: torch.Tensor) -> torch.Tensor:
+        """Encoder features -> what the condition projection receives (same map for captions and prompts)."""
+        return (features.to(self.text_center) - self.text_center) / self.text_scale
 
     def batch_condition(self, batch: dict):
         """The raw condition of a training batch: caption features by table lookup, action ids, or None."""
@@ -104,7 +121,23 @@ class MotionDiffusionModule(L.LightningModule):
 
     def configure_optimizers(self):
         o = self.hparams.optim
-        return torch.optim.AdamW(self.parameters(), lr=o["lr"], weight_decay=o.get("weight_decay", 0.0))
+        opt = torch.optim.AdamW(self.parameters(), lr=o["lr"], weight_decay=o.get("weight_decay", 0.0))
+        if o.get("schedule", "constant") == "constant":  # MDM: constant lr
+            return opt
+        if o["schedule"] != "cosine":
+            raise ValueError(f"unknown optim.schedule {o['schedule']!r}; choose constant or cosine")
+        total, warmup = int(self.trainer.max_steps), int(o.get("warmup_steps", 0))
+        if total <= 0:
+            raise ValueError("optim.schedule=cosine needs trainer.max_steps > 0")
+
+        def factor(step: int) -> float:  # linear warm-up, then cosine decay to 0 at max_steps
+            if step < warmup:
+                return (step + 1) / warmup
+            progress = min(1.0, (step - warmup) / max(1, total - warmup))
+            return 0.5 * (1.0 + math.cos(math.pi * progress))
+
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, factor)
+        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "step"}}
 
     # ---- sampling -----------------------------------------------------------------------------------------------
     @torch.inference_mode()
@@ -124,8 +157,13 @@ class MotionDiffusionModule(L.LightningModule):
         self.eval()
         b, n = len(lengths), int(lengths.max())
         mask = torch.arange(n, device=self.device)[None] < lengths.to(self.device)[:, None]
-        scale = guidance if cond is not None else 1.0
-        fn = guided_model_fn(self.denoiser, cond, scale, mask=mask)
+        if cond is None:  # unconditioned: the model's ∅ condition (what guidance uses as its unconditional half)
+            drop = torch.ones(b, dtype=torch.bool, device=self.device)
+
+            def fn(x, t):
+                return self.denoiser(x, t, cond=None, mask=mask, drop_cond=drop)
+        else:
+            fn = guided_model_fn(self.denoiser, cond, guidance, mask=mask)
         shape = (b, n, self.hparams.feature_dim)
         if sampler == "ddim":
             return ddim_sample(

@@ -1,0 +1,1 @@
+"""Evaluation: behaviour checks of generated motion (and, later, evaluators and metrics)."""

@@ -1,0 +1,18 @@
+"""End-to-end fixtures: tiny models trained by the real train.py on the embedded data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from cli_helpers import train_tiny
+
+
+@pytest.fixture(scope="session")
+def text_ckpt(tmp_path_factory) -> Path:
+    return train_tiny(tmp_path_factory.mktemp("text_model"))
+
+
+@pytest.fixture(scope="session")
+def action_ckpt(tmp_path_factory) -> Path:
+    return train_tiny(tmp_path_factory.mktemp("action_model"), "condition=action")

@@ -1,0 +1,29 @@
+"""The behaviour checks used to judge a trained model (walks travel, raised hands), on synthetic motion."""
+
+from __future__ import annotations
+
+import numpy as np
+from test_captions_and_splits import _rest_pose, _walk
+
+from motiondiff.data.datamodules import embedded_data_root
+from motiondiff.eval.behaviour import Behaviour, mean_joint_speed, real_clips
+
+
+def test_walk_and_raise_are_told_apart():
+    walk = _walk(0, 3.0, frames=80)
+    raise_both = np.repeat(_rest_pose()[None], 50, axis=0)
+    raise_both[10:40, [20, 21], 1] = raise_both[0, 15, 1] + 0.25  # both wrists above the head for 1.5 s
+    b = Behaviour.of([walk, raise_both], fps=20)
+    assert b.walk_success().tolist() == [True, False]
+    assert b.in_place().tolist() == [False, True]
+    assert b.both_wrists_up.tolist() == [False, True]
+    # the rest pose glides 3 m in 79 frames: every joint moves 3/79 m per frame
+    assert abs(mean_joint_speed(walk, 20) - 3.0 / 79 * 20) < 1e-9 and b.speed[0] == mean_joint_speed(walk, 20)
+
+
+def test_real_reference_clips_from_the_embedded_data():
+    walks = real_clips(embedded_data_root(), "walk", 80)
+    raises = real_clips(embedded_data_root(), "raise-up-both-hands", 50)
+    assert len(walks) >= 20 and len(raises) >= 10
+    assert Behaviour.of(walks, 20).walk_success().mean() > 0.9
+    assert Behaviour.of(raises, 20).in_place().all()
