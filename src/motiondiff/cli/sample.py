@@ -113,8 +113,9 @@ def run(cfg: DictConfig) -> Path:
     frames = num_frames(cfg, module)
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
-    if cfg.guidance < 0:
-        raise UsageError(f"guidance must be >= 0, got {cfg.guidance}")
+    guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)
+    if guidance < 0:
+        raise UsageError(f"guidance must be >= 0, got {guidance}")
     steps = cfg.steps if cfg.steps is not None else cfg.sampler.steps
     if steps is not None and not 1 <= steps <= module.diffusion.num_steps:
         raise UsageError(
@@ -128,7 +129,7 @@ def run(cfg: DictConfig) -> Path:
         feats = module.sample(
             cond,
             torch.full((cfg.num_samples,), frames),
-            guidance=float(cfg.guidance),
+            guidance=guidance,
             sampler=cfg.sampler.name,
             steps=steps,
             eta=float(cfg.sampler.eta),
@@ -137,7 +138,7 @@ def run(cfg: DictConfig) -> Path:
         )
         feats = module.denormalise(feats).cpu().numpy()
         results += save_samples(out, prompt, feats, module, cfg.render)
-    summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": cfg.guidance, "samples": results}
+    summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "samples": results}
     (out / "results.json").write_text(json.dumps(summary, indent=1))
     print(f"\n{len(results)} sample(s) written to {out}")
     return out

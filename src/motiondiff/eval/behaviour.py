@@ -67,6 +67,7 @@ def generate(
 
     frames = min(round(seconds * module.hparams.fps), module.hparams.max_frames)
     gen = torch.Generator().manual_seed(seed)
+    guidance = module.default_guidance if guidance is None else guidance
     cond = make_condition(module, prompt, n) if prompt is not None else None
     feats = module.sample(
         cond, torch.full((n,), frames), guidance=guidance, sampler=sampler, steps=steps, generator=gen, progress=True
@@ -125,6 +126,8 @@ def main(argv: list[str]) -> None:
     print(f"checkpoint: {ckpt}")
     data_root = args.get("data", str(REPO_DIR / "data" / "bandai_mini"))
     sampling = {"sampler": args.get("sampler", "ddpm"), "steps": int(args["steps"]) if "steps" in args else None}
+    if "guidance" in args:
+        sampling["guidance"] = float(args["guidance"])
     print_report(report(module, data_root, int(args.get("num_samples", 10)), int(args.get("seed", 0)), **sampling))
 
 

@@ -177,6 +177,10 @@ class MotionDiffusionModule(L.LightningModule):
             )  # fmt: skip
         raise ValueError(f"unknown sampler {sampler!r}; choose ddpm or ddim")
 
+    @property
+    def default_guidance(self) -> float:
+        return float(self.hparams.model.get("sample_guidance", 2.5))
+
     def denormalise(self, features: torch.Tensor) -> torch.Tensor:
         return features * self.std + self.mean
 
