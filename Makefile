@@ -26,7 +26,7 @@ $(VENV)/.installed: pyproject.toml requirements.lock
 # Train the default model on the embedded data, sample a few prompts, and check it does what they say.
 PROMPTS := [a person walks forward, a person raises both hands, a person runs, a person bows]
 train: setup
-	$(PY) train.py
+	$(PY) train.py experiment=cpu_quickstart
 	$(PY) sample.py "prompts=$(PROMPTS)" num_samples=2 length=4 render=mp4
 	$(PY) -m motiondiff.eval.behaviour num_samples=10
 	@echo "checkpoint: $$(ls -t outputs/train/*/checkpoints/last.ckpt | head -1)"

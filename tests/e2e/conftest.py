@@ -15,4 +15,5 @@ def text_ckpt(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def action_ckpt(tmp_path_factory) -> Path:
-    return train_tiny(tmp_path_factory.mktemp("action_model"), "condition=action")
+    # also runs the `make train` preset (cosine lr, EMA weights) for a few steps
+    return train_tiny(tmp_path_factory.mktemp("action_model"), "condition=action", "experiment=cpu_quickstart")

@@ -58,11 +58,12 @@ def generate(
     seconds: float,
     n: int,
     seed: int,
-    guidance: float = 2.5,
+    guidance: float | None = None,
     sampler: str = "ddpm",
     steps: int | None = None,
 ):
-    """n joint sequences (frames, 22, 3) for a prompt (None: unconditioned); MDM's sampler by default."""
+    """n joint sequences (frames, 22, 3) for a prompt (None: unconditioned); MDM's sampler and the model's
+    default guidance unless given."""
     from motiondiff.cli.sample import make_condition
 
     frames = min(round(seconds * module.hparams.fps), module.hparams.max_frames)
@@ -102,14 +103,16 @@ def report(module, data_root, n: int = 10, seed: int = 0, **sampling) -> dict:
 
 
 def print_report(rows: dict) -> None:
-    print(f"{'prompt':<28}{'who':>10}{'n':>4}{'travel>=1.5m':>14}{'travel<=0.5m':>14}{'2 wrists up':>13}"
+    """Counts per prompt; "walk ok" = travelled >= 1.5 m with no wrist above the head."""
+    print(f"{'prompt':<28}{'who':>10}{'n':>4}{'travel>=1.5m':>14}{'walk ok':>9}{'travel<=0.5m':>14}{'2 wrists up':>13}"
           f"{'no wrist up':>13}{'speed m/s':>11}")  # fmt: skip
     for prompt, pair in rows.items():
         for who, b in pair.items():
             if b is None:
                 continue
             k = len(b.travel)
-            print(f"{prompt:<28}{who:>10}{k:>4}{int((b.travel >= 1.5).sum()):>14}{int(b.in_place().sum()):>14}"
+            print(f"{prompt:<28}{who:>10}{k:>4}{int((b.travel >= 1.5).sum()):>14}{int(b.walk_success().sum()):>9}"
+                  f"{int(b.in_place().sum()):>14}"
                   f"{int(b.both_wrists_up.sum()):>13}{int((~b.any_wrist_up).sum()):>13}{b.speed.mean():>11.2f}")  # fmt: skip
 
 
@@ -123,7 +126,9 @@ def main(argv: list[str]) -> None:
     outputs = os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs")
     ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
     module = load_module(ckpt)
-    print(f"checkpoint: {ckpt}")
+    print(
+        f"checkpoint: {ckpt}  sampler: {args.get('sampler', 'ddpm')}  guidance: {args.get('guidance', module.default_guidance)}"
+    )
     data_root = args.get("data", str(REPO_DIR / "data" / "bandai_mini"))
     sampling = {"sampler": args.get("sampler", "ddpm"), "steps": int(args["steps"]) if "steps" in args else None}
     if "guidance" in args:

@@ -30,9 +30,12 @@ def render_motion(
     joints: np.ndarray, skeleton: Skeleton, path: str | Path, title: str = "", fps: float = 20.0, dpi: int = 80
 ) -> Path:
     """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif)."""
+    import logging
+
     import matplotlib
 
     matplotlib.use("Agg")
+    logging.getLogger("matplotlib.animation").setLevel(logging.WARNING)  # it logs every save at INFO
     import matplotlib.pyplot as plt
     from matplotlib import animation
 
