@@ -184,3 +184,14 @@ def test_embeddings():
     assert y.shape == (4, 16) and torch.equal(y[1], y[3]) and not torch.allclose(y[1], y[2])
     with pytest.raises(ValueError, match="even"):
         TimestepEmbedder(15)
+
+
+def test_presets_match_the_hydra_model_configs():
+    from pathlib import Path
+
+    import yaml
+
+    conf = Path(__file__).resolve().parents[2] / "conf" / "model"
+    for name, arch in PRESETS.items():
+        spec = yaml.safe_load((conf / f"{name}.yaml").read_text())
+        assert {k: spec[k] for k in arch} == arch, name
