@@ -72,3 +72,8 @@ def find_checkpoint(spec: str, output_dir: str | Path) -> Path:
             "or pass checkpoint=<path to a .ckpt>"
         )
     return runs[-1]
+
+
+def text_encoder_kwargs(cfg_text: DictConfig | dict) -> dict:
+    """Arguments of `build_text_encoder` from a text_encoder config (its `dim` is informational)."""
+    return {k: v for k, v in to_dict(cfg_text).items() if k != "dim"}

@@ -10,7 +10,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.cli.common import UsageError, to_dict
+from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.diffusion import MotionDiffusionModule
 
@@ -28,10 +28,6 @@ def build_text_table(cfg: DictConfig, dm: MotionDataModule):
     if not texts:
         raise UsageError(f"dataset {cfg.dataset.name} has no captions: use condition=action or condition=none")
     return cache.table(texts)
-
-
-def text_encoder_kwargs(cfg_text: DictConfig | dict) -> dict:
-    return {k: v for k, v in to_dict(cfg_text).items() if k not in ("dim",)}
 
 
 def build_module(cfg: DictConfig, dm: MotionDataModule) -> MotionDiffusionModule:

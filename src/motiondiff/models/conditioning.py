@@ -38,59 +38,20 @@ def _drop(emb: Tensor, drop_cond: Tensor | None) -> Tensor:
 
 
 class ConditionEmbedder(nn.Module):
-    """Base class. `forward(cond, drop_cond=None, *, batch_size=None, device=None) -> (B, d_model)`."""
+    """Base class. `forward(cond, drop_cond=None, *, batch_size=None, device=None) -> (B, d_model)`.
+
+    Subclasses with a real condition implement `_check(cond, batch)` and `_embed(cond, drop_cond)`; the batch size,
+    the drop mask and the all-∅ batch (no cond at all, e.g. the unconditional half of CFG) are handled here once.
+    """
 
     d_model: int | None
     kind: str = "base"
+    expects: str = ""  # what cond must be, for messages
 
     def _null(self, batch: int, device: torch.device | str | None) -> Tensor:
         if self.d_model is None:
             raise ValueError(f"{type(self).__name__} has no d_model; give it one or pass it to a denoiser")
         return torch.zeros(batch, self.d_model, device=device)
-
-
-class TextCondition(ConditionEmbedder):
-    """Precomputed text-encoder feature (B, cond_dim) float -> Linear -> (B, d)."""
-
-    kind = "text"
-
-    def __init__(self, cond_dim: int, d_model: int):
-        super().__init__()
-        self.cond_dim, self.d_model = cond_dim, d_model
-        self.proj = nn.Linear(cond_dim, d_model)
-
-    def forward(
-        self,
-        cond: Tensor | None,
-        drop_cond: Tensor | None = None,
-        *,
-        batch_size: int | None = None,
-        device: torch.device | str | None = None,
-    ) -> Tensor:
-        batch = _batch_size(cond, drop_cond, batch_size)
-        _check_drop(drop_cond, batch)
-        if cond is None:
-            if drop_cond is not None and bool(drop_cond.all()):  # all-∅ batch (e.g. the unconditional half of CFG)
-                return self._null(batch, device if device is not None else self.proj.weight.device)
-            raise ValueError("text condition needs cond = (B, cond_dim) text features; for ∅ pass drop_cond all True")
-        if cond.ndim != 2 or cond.shape != (batch, self.cond_dim) or not cond.is_floating_point():
-            raise ValueError(
-                f"text condition expects ({batch}, {self.cond_dim}) float features, got {tuple(cond.shape)} {cond.dtype}; is cond_dim the text encoder's dim?"
-            )
-        return _drop(self.proj(cond.to(self.proj.weight.dtype)), drop_cond)
-
-
-class ActionCondition(ConditionEmbedder):
-    """Action class index (B,) long -> learned (B, d) embedding, one vector per class (MDM: d params per class)."""
-
-    kind = "action"
-
-    def __init__(self, num_actions: int, d_model: int):
-        super().__init__()
-        if num_actions < 1:
-            raise ValueError(f"num_actions must be >= 1, got {num_actions}")
-        self.num_actions, self.d_model = num_actions, d_model
-        self.embedding = nn.Embedding(num_actions, d_model)
 
     def forward(
         self,
@@ -104,16 +65,64 @@ class ActionCondition(ConditionEmbedder):
         _check_drop(drop_cond, batch)
         if cond is None:
             if drop_cond is not None and bool(drop_cond.all()):
-                return self._null(batch, device if device is not None else self.embedding.weight.device)
-            raise ValueError("action condition needs cond = (B,) class indices; for ∅ pass drop_cond all True")
+                param = next(self.parameters(), None)
+                return self._null(batch, device if device is not None else getattr(param, "device", None))
+            raise ValueError(f"{self.kind} condition needs cond = {self.expects}; for ∅ pass drop_cond all True")
+        self._check(cond, batch)
+        return _drop(self._embed(cond, drop_cond), drop_cond)
+
+    def _check(self, cond: Tensor, batch: int) -> None:
+        raise NotImplementedError
+
+    def _embed(self, cond: Tensor, drop_cond: Tensor | None) -> Tensor:
+        raise NotImplementedError
+
+
+class TextCondition(ConditionEmbedder):
+    """Precomputed text-encoder feature (B, cond_dim) float -> Linear -> (B, d)."""
+
+    kind = "text"
+    expects = "(B, cond_dim) text features"
+
+    def __init__(self, cond_dim: int, d_model: int):
+        super().__init__()
+        self.cond_dim, self.d_model = cond_dim, d_model
+        self.proj = nn.Linear(cond_dim, d_model)
+
+    def _check(self, cond: Tensor, batch: int) -> None:
+        if cond.ndim != 2 or cond.shape != (batch, self.cond_dim) or not cond.is_floating_point():
+            raise ValueError(
+                f"text condition expects ({batch}, {self.cond_dim}) float features, got {tuple(cond.shape)} {cond.dtype}; is cond_dim the text encoder's dim?"
+            )
+
+    def _embed(self, cond: Tensor, drop_cond: Tensor | None) -> Tensor:
+        return self.proj(cond.to(self.proj.weight.dtype))
+
+
+class ActionCondition(ConditionEmbedder):
+    """Action class index (B,) long -> learned (B, d) embedding, one vector per class (MDM: d params per class)."""
+
+    kind = "action"
+    expects = "(B,) class indices"
+
+    def __init__(self, num_actions: int, d_model: int):
+        super().__init__()
+        if num_actions < 1:
+            raise ValueError(f"num_actions must be >= 1, got {num_actions}")
+        self.num_actions, self.d_model = num_actions, d_model
+        self.embedding = nn.Embedding(num_actions, d_model)
+
+    def _check(self, cond: Tensor, batch: int) -> None:
         if cond.shape != (batch,) or cond.is_floating_point() or cond.dtype == torch.bool:
             raise ValueError(
                 f"action condition expects ({batch},) integer class indices, got {tuple(cond.shape)} {cond.dtype}"
             )
+
+    def _embed(self, cond: Tensor, drop_cond: Tensor | None) -> Tensor:
         idx = cond.long() if drop_cond is None else cond.long().masked_fill(drop_cond.to(cond.device), 0)
         if bool(((idx < 0) | (idx >= self.num_actions)).any()):
             raise ValueError(f"action index out of range [0, {self.num_actions}): {idx.tolist()}")
-        return _drop(self.embedding(idx), drop_cond)
+        return self.embedding(idx)
 
 
 class NoCondition(ConditionEmbedder):
