@@ -130,3 +130,5 @@ def test_kill_and_resume_continues_from_saved_step(tmp_path):
     metrics = next(resumed.parents[1].glob("csv/*/metrics.csv")).read_text().splitlines()
     steps = [int(row.split(",")[metrics[0].split(",").index("step")]) for row in metrics[1:] if row]
     assert min(steps) >= saved  # the resumed run logged only steps after the checkpoint
+    print(f"\nkilled with {len(ckpts)} checkpoints on disk; resumed from step {saved}, first logged step {min(steps)}, "
+          f"finished at {saved + 3}")  # fmt: skip
