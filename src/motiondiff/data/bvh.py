@@ -18,12 +18,12 @@ Errors: every problem in the text raises `BVHError` (a ValueError) naming the fi
 from __future__ import annotations
 
 import os
-import secrets
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from motiondiff.atomic import atomic_write
 from motiondiff.data.bvh_parse import VALID_CHANNELS, BVHError, RawBVH, channel_kind, parse_text
 from motiondiff.kinematics import forward_kinematics
 from motiondiff.rotations import (
@@ -333,15 +333,7 @@ def write_bvh(path: str | os.PathLike, motion: BVHMotion, precision: int = 6) ->
     path = Path(path)
     _check_target(path)
     text = format_bvh(motion, precision)
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    try:
-        with open(tmp, "x", encoding="utf-8", newline="\n") as f:  # 'x' honours the umask, unlike mkstemp
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    return atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8", newline="\n"), suffix=".bvh")
 
 
 # ---- building from arrays ----------------------------------------------------------------------------------

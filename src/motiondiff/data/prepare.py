@@ -22,12 +22,13 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from motiondiff.atomic import atomic_write
 from motiondiff.data import bandai
 from motiondiff.data.bvh import BVHError, parse_bvh
 from motiondiff.data.captions import GENERATED_NOTE, generate_captions
 from motiondiff.data.features import mean_std
 from motiondiff.data.joint_map import JointMap
-from motiondiff.data.prepared import SPLITS, atomic_save, fill_derived, save_split
+from motiondiff.data.prepared import SPLITS, fill_derived, save_split
 from motiondiff.data.processing import (
     TARGET_FPS,
     ClipError,
@@ -131,12 +132,12 @@ def prepare_bandai(
     for s in SPLITS:
         save_split(out / f"{s}.npz", arrays[s], compact=compact)
     for name, arr in (("Mean.npy", mean), ("Std.npy", std)):
-        atomic_save(out / name, lambda tmp, a=arr: np.save(open(tmp, "wb"), a), suffix=".npy")
+        atomic_write(out / name, lambda tmp, a=arr: np.save(tmp, a), suffix=".npy")
     report = _report(per_split, skipped, sources, joint_map, compact, per_group, max_frames, seed)
     meta = {**{k: v for k, v in report.items() if k not in ("skipped",)}, "labels": labels, "fps": TARGET_FPS,
             "captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}  # fmt: skip
     for name, obj in (("report.json", report), ("meta.json", meta)):
-        atomic_save(out / name, lambda tmp, o=obj: Path(tmp).write_text(json.dumps(o, indent=1)), suffix=".json")
+        atomic_write(out / name, lambda tmp, o=obj: Path(tmp).write_text(json.dumps(o, indent=1)), suffix=".json")
     _write_license_and_readme(out, sources, report)
     return report
 
@@ -147,7 +148,7 @@ def _write_license_and_readme(out: Path, sources, report: dict) -> None:
         src = Source(path)
         if src.exists("LICENSE"):
             text = src.read_text("LICENSE")
-            atomic_save(out / "LICENSE", lambda tmp, t=text: Path(tmp).write_text(t), suffix="")
+            atomic_write(out / "LICENSE", lambda tmp, t=text: Path(tmp).write_text(t), suffix="")
             break
     opts = report["options"]
     cmd = "python -m motiondiff.data.prepare bandai " + " ".join(f"--src {Path(p).name}" for p in sources)
@@ -169,7 +170,7 @@ Rebuilt with (from the folder holding the zips; in a motiondiff checkout `make d
 
     {cmd}
 """
-    atomic_save(out / "README.md", lambda tmp: Path(tmp).write_text(text), suffix=".md")
+    atomic_write(out / "README.md", lambda tmp: Path(tmp).write_text(text), suffix=".md")
 
 
 def _run(jobs: list[Job], map_name: str, workers: int | None, progress: bool) -> list:

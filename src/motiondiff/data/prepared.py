@@ -19,13 +19,12 @@ them with the very same functions that made them, so both forms load to identica
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from motiondiff.atomic import atomic_write
 from motiondiff.data.datasets import MotionRecord
 from motiondiff.data.errors import DatasetNotFoundError
 from motiondiff.data.features import features_from_canonical
@@ -38,25 +37,9 @@ PREPARED_LAYOUT = """  {root}/train.npz, {root}/val.npz, {root}/test.npz   one n
   {root}/meta.json                                     labels, skeleton, caption note, source"""
 
 
-def atomic_save(path: Path, save_fn, suffix: str) -> None:
-    """Write through `save_fn(tmp_path)` into a temp file beside `path`, then rename: never a half-written file."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        save_fn(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600 files; give the usual permissions
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def save_split(path: Path, arrays: dict[str, np.ndarray], compact: bool = False) -> None:
     arrays = {k: v for k, v in arrays.items() if not (compact and k in DERIVED)}
-    atomic_save(path, lambda tmp: np.savez_compressed(tmp, **arrays), suffix=".npz")
+    atomic_write(path, lambda tmp: np.savez_compressed(tmp, **arrays), suffix=".npz")
 
 
 @dataclass

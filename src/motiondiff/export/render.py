@@ -6,12 +6,11 @@ Files are written to a temporary name and renamed, so a failed render leaves not
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from motiondiff.atomic import atomic_write
 from motiondiff.skeleton import Skeleton
 
 # Left limbs blue, right limbs red, torso dark: the usual convention in motion papers.
@@ -78,15 +77,8 @@ def render_motion(
         return []
 
     anim = animation.FuncAnimation(fig, draw, frames=len(joints), interval=1000 / fps)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
-    os.close(fd)
     try:
-        anim.save(tmp, writer=_writer(suffix, fps), dpi=dpi)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        atomic_write(path, lambda tmp: anim.save(tmp, writer=_writer(suffix, fps), dpi=dpi), suffix=suffix)
     finally:
         plt.close(fig)
     return path

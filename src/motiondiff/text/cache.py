@@ -8,8 +8,6 @@ file and renamed, so a crash never leaves a half-written file.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
@@ -18,20 +16,10 @@ from safetensors import SafetensorError
 from safetensors.torch import load_file, save_file
 from torch import Tensor
 
+from motiondiff.atomic import atomic_write
 from motiondiff.text.encoders import TextEncoder, check_texts
 
 _TENSOR_KEY = "embeddings"
-
-
-def _atomic_write(path: Path, write) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 class TextEmbeddingCache:
@@ -105,7 +93,7 @@ class TextEmbeddingCache:
         texts = sorted(self._index, key=self._index.__getitem__)
         meta = {"encoder": self.encoder.name, "dim": self.encoder.dim, "texts": texts}
         # Tensor first, texts second: the loader checks that both agree, so an interrupted pair is detected.
-        _atomic_write(
+        atomic_write(
             self.tensor_path,
             lambda tmp: save_file(
                 {_TENSOR_KEY: self._matrix.contiguous()},
@@ -113,7 +101,7 @@ class TextEmbeddingCache:
                 metadata={"encoder": self.encoder.name, "dim": str(self.encoder.dim)},
             ),
         )
-        _atomic_write(self.texts_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, ensure_ascii=False)))
+        atomic_write(self.texts_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, ensure_ascii=False)))
 
     def _load(self) -> None:
         fix = f"delete {self.tensor_path} and {self.texts_path} to rebuild the cache"
