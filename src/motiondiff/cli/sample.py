@@ -16,6 +16,7 @@ from omegaconf import DictConfig, ListConfig
 from motiondiff.cli.common import UsageError, find_checkpoint, to_dict
 from motiondiff.data.captions import measure
 from motiondiff.data.features import joints_from_features, skeleton_for_dim
+from motiondiff.eval.behaviour import mean_joint_speed
 from motiondiff.lit.diffusion import MotionDiffusionModule
 
 MAX_TEXT_CHARS = 1000  # far beyond any caption the encoders were trained on (CLIP keeps 77 tokens)
@@ -159,7 +160,7 @@ def save_samples(out: Path, prompt: str | None, feats: np.ndarray, module, rende
         if render != "none":
             video = render_motion(joints, skeleton, f"{stem}.{render}", title=prompt or "unconditioned", fps=fps)
         facts = measure(joints, fps)
-        speed = float(np.linalg.norm(np.diff(joints, axis=0), axis=-1).mean() * fps)
+        speed = mean_joint_speed(joints, fps)
         rows.append(
             {
                 "prompt": prompt,
