@@ -61,6 +61,22 @@ class Skeleton:
         return self.parts[name]
 
     @cached_property
+    def mirror_permutation(self) -> tuple[int, ...]:
+        """For each joint, its left/right counterpart (itself on the midline): mirroring a motion is negating x (the
+        body's side axis in the canonical frame) and reading the joints through this permutation."""
+        index = {n.lower(): i for i, n in enumerate(self.joint_names)}
+        out = []
+        for i, name in enumerate(self.joint_names):
+            partner = None
+            for a, b in _SIDE_SWAPS:
+                swapped = re.sub(a, b, name.lower(), count=1)
+                if swapped != name.lower() and swapped in index:
+                    partner = index[swapped]
+                    break
+            out.append(i if partner is None else partner)
+        return tuple(out)
+
+    @cached_property
     def children(self) -> tuple[tuple[int, ...], ...]:
         kids: list[list[int]] = [[] for _ in self.parents]
         for i, p in enumerate(self.parents):
@@ -168,6 +184,11 @@ def _joint_role(name: str) -> str:
     if _HEAD.search(low):
         return "head"
     return "torso"
+
+
+# Name patterns of a joint's other side: l_hip/r_hip, LeftArm/RightArm, KIT's LS/RS, ASF's lfemur/rfemur.
+_SIDE_SWAPS = ((r"left", "right"), (r"right", "left"), (r"^l", "r"), (r"^r", "l"), (r"_l(?=$|_)", "_r"),
+               (r"_r(?=$|_)", "_l"))  # fmt: skip
 
 
 def _joint_side(name: str) -> str | None:

@@ -59,11 +59,14 @@ def to_dict(cfg: DictConfig | dict | None) -> dict | None:
 
 
 def find_checkpoint(spec: str, output_dir: str | Path) -> Path:
-    """A checkpoint path, or 'latest': the newest last.ckpt of a training run under output_dir/train."""
-    if spec != "latest":
+    """A checkpoint path; 'latest': the newest last.ckpt of a training run under output_dir/train; 'best': the
+    best-FID checkpoint of that same newest run."""
+    if spec not in ("latest", "best"):
         path = Path(spec)
         if not path.is_file():
-            raise UsageError(f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt> or checkpoint=latest")
+            raise UsageError(
+                f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt>, checkpoint=latest or checkpoint=best"
+            )
         return path
     runs = sorted(Path(output_dir).glob("train*/**/checkpoints/last.ckpt"), key=lambda p: p.stat().st_mtime)
     if not runs:
@@ -71,7 +74,15 @@ def find_checkpoint(spec: str, output_dir: str | Path) -> Path:
             f"no trained checkpoint under {output_dir}/train*: train one first (`make train` or `python train.py`) "
             "or pass checkpoint=<path to a .ckpt>"
         )
-    return runs[-1]
+    if spec == "latest":
+        return runs[-1]
+    best = sorted(runs[-1].parent.glob("best-fid-*.ckpt"))
+    if not best:
+        raise UsageError(
+            f"the newest run {runs[-1].parent.parent} has no best-FID checkpoint (it trained without evaluators or "
+            "never evaluated); use checkpoint=latest"
+        )
+    return best[-1]
 
 
 def text_encoder_kwargs(cfg_text: DictConfig | dict) -> dict:

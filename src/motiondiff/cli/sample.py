@@ -13,7 +13,7 @@ import torch
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.cli.common import UsageError, find_checkpoint, to_dict
+from motiondiff.cli.common import UsageError, find_checkpoint, text_encoder_kwargs, to_dict
 from motiondiff.data.captions import measure
 from motiondiff.data.features import joints_from_features, skeleton_for_dim
 from motiondiff.eval.behaviour import mean_joint_speed
@@ -90,15 +90,27 @@ def num_frames(cfg: DictConfig, module: MotionDiffusionModule) -> int:
 
 
 def make_condition(module: MotionDiffusionModule, prompt: str | None, n: int):
+    return condition_batch(module, [prompt] * n)
+
+
+def condition_batch(module: MotionDiffusionModule, conditions: list):
+    """The model's condition for a batch: prompts (text models, features cached per prompt), action names or ids
+    (action models), or None (unconditioned models ignore what they are given)."""
     if module.condition_kind == "text":
-        from motiondiff.cli.train import text_encoder_kwargs
         from motiondiff.text.encoders import build_text_encoder
 
         if not hasattr(module, "_encoder"):
             module._encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
-        return module.prepare_text(module._encoder.encode([prompt]).to(module.device)).expand(n, -1)
+            module._prompt_features = {}
+        new = [c for c in dict.fromkeys(conditions) if c not in module._prompt_features]
+        if new:
+            module._prompt_features.update(zip(new, module._encoder.encode(new).cpu(), strict=True))
+        rows = torch.stack([module._prompt_features[c] for c in conditions])
+        return module.prepare_text(rows.to(module.device))
     if module.condition_kind == "action":
-        return torch.full((n,), module.hparams.action_names.index(prompt), dtype=torch.long, device=module.device)
+        names = module.hparams.action_names
+        ids = [c if isinstance(c, int | np.integer) else names.index(c) for c in conditions]
+        return torch.tensor(ids, dtype=torch.long, device=module.device)
     return None
 
 

@@ -54,6 +54,25 @@ def build_module(cfg: DictConfig, dm: MotionDataModule) -> MotionDiffusionModule
     )
 
 
+def evaluation_callbacks(callbacks: list) -> list:
+    """Leave out the generation evaluation and the best-FID checkpoint when the dataset has no evaluators."""
+    from lightning.pytorch.callbacks import ModelCheckpoint
+
+    from motiondiff.eval.callbacks import GenerationEvaluation
+
+    missing = [c for c in callbacks if isinstance(c, GenerationEvaluation) and not c.available]
+    if not missing:
+        return callbacks
+    log.warning(
+        "no evaluators in %s: training without FID/R-precision evaluation or best-FID checkpoint (make them with "
+        "`python -m motiondiff.eval.train_evaluator dataset=<name>`)",
+        missing[0].evaluator_dir,
+    )
+    needs_fid = [c for c in callbacks if isinstance(c, ModelCheckpoint) and (c.monitor or "").startswith("val/")
+                 and c.monitor != "val/loss"]  # fmt: skip
+    return [c for c in callbacks if c not in missing and c not in needs_fid]
+
+
 def run(cfg: DictConfig) -> Path:
     L.seed_everything(cfg.seed, workers=True)
     out = Path(HydraConfig.get().runtime.output_dir)
@@ -63,7 +82,7 @@ def run(cfg: DictConfig) -> Path:
     if cfg.condition.kind == "text":
         module.set_text_table(*build_text_table(cfg, dm))
     loggers = [instantiate(c) for c in (cfg.logger or {}).values()]
-    callbacks = [instantiate(c) for c in cfg.callbacks.values()]
+    callbacks = evaluation_callbacks([instantiate(c) for c in (cfg.callbacks or {}).values() if c is not None])
     if cfg.ema:
         from lightning.pytorch.callbacks import EMAWeightAveraging
 

@@ -1,0 +1,87 @@
+"""Evaluation while training: generate for a fixed validation subset, compute the protocol's metrics, log them.
+
+`GenerationEvaluation` runs at the end of every N-th validation epoch. It samples one motion per clip of a fixed
+subset of the validation split (fast DDIM sampling, fixed seed, so evaluations differ only by the weights), embeds
+them with the dataset's evaluators and logs `val/fid`, `val/r_precision_top{1,2,3}`, `val/mm_dist`,
+`val/diversity` (text), `val/accuracy` (action) or `val/kid`, `val/precision`, `val/recall` (unconditioned).
+A `ModelCheckpoint(monitor="val/fid", mode="min", save_top_k=1)` placed after it keeps the best-FID checkpoint.
+
+Place it before `EMAWeightAveraging` in the callback list: that callback swaps the averaged weights back out in
+its own `on_validation_epoch_end`, and the evaluation should see the averaged weights the model is sampled with.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+
+import lightning as L
+import numpy as np
+import torch
+
+from motiondiff.eval.protocol import EvalClips, Evaluators, generate, replication_metrics
+
+log = logging.getLogger(__name__)
+
+
+class GenerationEvaluation(L.Callback):
+    def __init__(
+        self,
+        evaluator_dir: str | Path,
+        every_n_epochs: int = 1,
+        num_clips: int = 32,
+        split: str = "val",
+        sampler: str = "ddim",
+        steps: int = 50,
+        guidance: float | None = None,
+        batch_size: int = 64,
+        seed: int = 0,
+    ):
+        self.evaluator_dir = Path(evaluator_dir)
+        self.every_n_epochs = every_n_epochs
+        self.num_clips, self.split = num_clips, split
+        self.sampling = {"sampler": sampler, "steps": steps}
+        self.guidance, self.batch_size, self.seed = guidance, batch_size, seed
+        self.evaluators: Evaluators | None = None
+        self._real: tuple[EvalClips, dict, list] | None = None
+
+    @property
+    def available(self) -> bool:
+        """Whether the dataset has evaluators (without them there is nothing to compute and no val/fid)."""
+        return any((self.evaluator_dir / f"{k}.safetensors").is_file() for k in ("text_motion", "action"))
+
+    def setup(self, trainer: L.Trainer, pl_module: L.LightningModule, stage: str) -> None:
+        if self.available and self.evaluators is None:
+            self.evaluators = Evaluators.load(self.evaluator_dir, num_joints=pl_module.hparams.num_joints)
+
+    def _real_set(self, trainer: L.Trainer, pl_module) -> tuple[EvalClips, dict, list]:
+        if self._real is None:
+            clips = EvalClips.from_dataset(trainer.datamodule.dataset(self.split), self.num_clips, self.seed)
+            captions = clips.pick_captions(np.random.default_rng(self.seed))
+            self._real = (clips, self.evaluators.embed_motion(clips.features), captions)
+        return self._real
+
+    def on_validation_epoch_end(self, trainer: L.Trainer, pl_module) -> None:
+        if self.evaluators is None or trainer.sanity_checking:
+            return
+        if (trainer.current_epoch + 1) % self.every_n_epochs:
+            return
+        start = time.perf_counter()
+        clips, real, captions = self._real_set(trainer, pl_module)
+        kind = pl_module.condition_kind
+        conditions = {"text": captions, "action": list(clips.actions)}.get(kind, [None] * len(clips))
+        guidance = pl_module.default_guidance if self.guidance is None else self.guidance
+        generator = torch.Generator(device=pl_module.device).manual_seed(self.seed)
+        was_training = pl_module.training
+        feats = generate(pl_module, conditions, clips.lengths, self.batch_size, generator,
+                         guidance=guidance, **self.sampling)  # fmt: skip
+        pl_module.train(was_training)
+        gen = self.evaluators.embed_motion(feats)
+        text = self.evaluators.embed_text(captions) if kind == "text" else None
+        values = replication_metrics(kind, self.evaluators, real, gen, text=text, actions=clips.actions,
+                                     generated_features=feats, seed=self.seed)  # fmt: skip
+        for name, value in values.items():
+            pl_module.log(f"val/{name}", float(value), prog_bar=name == "fid", sync_dist=True)
+        log.info("evaluation at step %d (%.1f s): %s", trainer.global_step, time.perf_counter() - start,
+                 ", ".join(f"{k} {v:.3f}" for k, v in values.items()))  # fmt: skip
