@@ -55,7 +55,8 @@ def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict,
     test = EvalClips.from_dataset(dm.dataset(cfg.split))
     train = EvalClips.from_dataset(dm.dataset("train"))
     real_test, real_train = evaluators.embed_motion(test.features), evaluators.embed_motion(train.features)
-    sampling = {"guidance": guidance, "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta)}
+    sampling = {"guidance": guidance, "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta),
+                "precision": cfg.precision}  # fmt: skip
     common = {"diversity_pairs": cfg.diversity_pairs, "pool_size": cfg.pool_size, "knn_k": cfg.knn_k}
     reps: dict[str, list[dict]] = {"Real": [], "Model": []}
     timings = {"generation_s": 0.0, "motions": 0}
@@ -141,7 +142,7 @@ def run(cfg: DictConfig) -> Path:
         f"{cfg.replications} replications ({cfg.mm_replications} for MultiModality), mean ± 95% CI; "
         f"{len(EvalClips.from_dataset(dm.dataset(cfg.split)))} {cfg.split} clips; R-precision pools of "
         f"min({cfg.pool_size}, clips)",
-        f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}; "
+        f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}, {cfg.precision}; "
         f"{timings['motions']} motions generated in {timings['generation_s']:.0f} s; whole evaluation {wall:.0f} s",
         "Real: real test clips scored against the real train clips",
     ]

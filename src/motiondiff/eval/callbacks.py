@@ -37,11 +37,12 @@ class GenerationEvaluation(L.Callback):
         guidance: float | None = None,
         batch_size: int = 64,
         seed: int = 0,
+        precision: str = "32-true",
     ):
         self.evaluator_dir = Path(evaluator_dir)
         self.every_n_epochs = every_n_epochs
         self.num_clips, self.split = num_clips, split
-        self.sampling = {"sampler": sampler, "steps": steps}
+        self.sampling = {"sampler": sampler, "steps": steps, "precision": precision}
         self.guidance, self.batch_size, self.seed = guidance, batch_size, seed
         self.evaluators: Evaluators | None = None
         self._real: tuple[EvalClips, dict, list] | None = None

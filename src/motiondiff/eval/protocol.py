@@ -182,11 +182,16 @@ def generate(
     batch_size: int = 64,
     generator: torch.Generator | None = None,
     progress=None,
+    precision: str = "32-true",
     **sampling,
 ) -> list[np.ndarray]:
     """De-normalised generated features, one per condition (caption, action id or None), at the given lengths.
-    `sampling`: guidance, sampler, steps, eta (see MotionDiffusionModule.sample)."""
+    `sampling`: guidance, sampler, steps, eta (see MotionDiffusionModule.sample). `precision="bf16-mixed"` runs
+    the denoiser under bf16 autocast, as it was trained by default (~2.7x faster on this project's CPU); any other
+    Lightning precision string samples in full precision."""
     from motiondiff.cli.sample import condition_batch
+
+    bf16 = str(precision).startswith("bf16")
 
     out: list[np.ndarray] = []
     order = torch.argsort(lengths, descending=True)  # similar lengths per batch: less padding to compute
@@ -195,7 +200,9 @@ def generate(
         idx = order[s : s + batch_size].tolist()
         cond = condition_batch(module, [conditions[i] for i in idx])
         lens = lengths[idx]
-        feats = module.denormalise(module.sample(cond, lens, generator=generator, **sampling)).float().cpu().numpy()
+        with torch.autocast(module.device.type, dtype=torch.bfloat16, enabled=bf16):
+            feats = module.sample(cond, lens, generator=generator, **sampling)
+        feats = module.denormalise(feats.float()).cpu().numpy()
         for row, i in enumerate(idx):
             results[i] = feats[row, : int(lengths[i])]
         if progress is not None:
