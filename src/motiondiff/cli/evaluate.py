@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from motiondiff.cli.common import UsageError, find_checkpoint, to_dict
 from motiondiff.eval import report
-from motiondiff.eval.protocol import TEXT_MOTION, EvalClips, Evaluators, generate, multimodality, replication_metrics
+from motiondiff.eval.protocol import EvalClips, Evaluators, generate, multimodality, replication_metrics
 
 log = logging.getLogger(__name__)
 PROTOCOL = {"text": "text", "action": "action", "none": "unconstrained"}
@@ -123,7 +123,7 @@ def run(cfg: DictConfig) -> Path:
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
-    _check(cfg, module)
+    guidance, steps = _check(cfg, module)  # before any work: bad settings fail at once
     dm = instantiate(cfg.dataset.datamodule)
     try:
         evaluators = Evaluators.load(cfg.evaluator_dir, num_joints=module.hparams.num_joints)
@@ -132,7 +132,6 @@ def run(cfg: DictConfig) -> Path:
     if module.condition_kind == "text" and evaluators.text_motion is None:
         raise UsageError(f"{cfg.evaluator_dir} has no text_motion evaluator, which text models are evaluated with")
     rows, reps, timings = evaluate(cfg, module, evaluators, dm)
-    guidance, steps = _check(cfg, module)
     wall = time.perf_counter() - wall
     protocol = PROTOCOL[module.condition_kind]
     name = f"{module.hparams.dataset} {module.condition_kind} model"
@@ -157,6 +156,3 @@ def run(cfg: DictConfig) -> Path:
     print("\n" + text)
     print(f"\nwritten to {out}")
     return out
-
-
-__all__ = ["run", "evaluate", "TEXT_MOTION"]
