@@ -144,7 +144,7 @@ def test_uses_batch_first_transformer_encoder():
 
 
 def test_registry_and_config_errors():
-    with pytest.raises(ValueError, match="known: trans_enc"):
+    with pytest.raises(ValueError, match=r"unknown backbone .lstm.; known: .*trans_enc"):
         build_backbone("lstm", d_model=8)
     with pytest.raises(ValueError, match="unknown preset"):
         MDMDenoiser.from_config(D, preset="huge", condition="none")

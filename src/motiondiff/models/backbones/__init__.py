@@ -1,5 +1,8 @@
 """Denoiser backbones, all with one interface so a config can swap them (`backbone=trans_enc`).
 
+MDM's backbone ablation (paper Table 1/8): trans_enc (default), trans_dec (token via cross-attention; `input_token`
+for "+ input token"), gru (token concatenated to every frame) and unet (1-D convolutions over time).
+
 forward(h: (B, N, d) frame embeddings, token: (B, d) time + condition token, mask: (B, N) bool, True = valid frame)
 -> (B, N, d). Padded frames' outputs may be anything but must not influence valid frames.
 """
@@ -11,7 +14,10 @@ from typing import Protocol, runtime_checkable
 
 from torch import Tensor, nn
 
+from motiondiff.models.backbones.gru import GRUBackbone
+from motiondiff.models.backbones.trans_dec import TransDecBackbone
 from motiondiff.models.backbones.trans_enc import TransEncBackbone
+from motiondiff.models.backbones.unet import UNetBackbone
 
 
 @runtime_checkable
@@ -24,6 +30,9 @@ class Backbone(Protocol):
 # name -> constructor taking keyword arguments (d_model, num_layers, ...). New backbones register here.
 BACKBONES: dict[str, Callable[..., nn.Module]] = {
     "trans_enc": TransEncBackbone,
+    "trans_dec": TransDecBackbone,
+    "gru": GRUBackbone,
+    "unet": UNetBackbone,
 }
 
 
@@ -33,4 +42,12 @@ def build_backbone(name: str, **kwargs) -> nn.Module:
     return BACKBONES[name](**kwargs)
 
 
-__all__ = ["BACKBONES", "Backbone", "TransEncBackbone", "build_backbone"]
+__all__ = [
+    "BACKBONES",
+    "Backbone",
+    "GRUBackbone",
+    "TransDecBackbone",
+    "TransEncBackbone",
+    "UNetBackbone",
+    "build_backbone",
+]
