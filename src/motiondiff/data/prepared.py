@@ -25,10 +25,12 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.atomic import atomic_write
+from motiondiff.data.clip import ClipMotion
 from motiondiff.data.datasets import MotionRecord
 from motiondiff.data.errors import DatasetNotFoundError
 from motiondiff.data.features import features_from_canonical
 from motiondiff.kinematics import forward_kinematics
+from motiondiff.skeleton import Skeleton
 
 SPLITS = ("train", "val", "test")
 DERIVED = ("features", "native_positions")
@@ -69,6 +71,30 @@ class PreparedSplit:
 
     def label(self, kind: str, i: int) -> str:
         return str(self.arrays[f"{kind}_names"][self.arrays[kind][i]])
+
+    def rig(self) -> Skeleton:
+        """The native rotation skeleton with the mean bone offsets of this split's clips (performers differ)."""
+        a = self.arrays
+        offsets = a["native_offsets"].astype(np.float64).mean(axis=0)
+        names = [str(n) for n in a["native_joint_names"]]
+        return Skeleton.infer("native", names, a["native_parents"], offsets, fps=float(a["fps"]))
+
+    def clips(self) -> list[ClipMotion]:
+        """Every clip's canonical SMPL-22 joints and native local rotations (what representations encode)."""
+        a, rig = self.arrays, self.rig()
+        out = []
+        for i in range(self.num_clips):
+            s = self.clip_slice(i)
+            out.append(
+                ClipMotion(
+                    joints=a["joints"][s],
+                    rotations=a["native_rotations"][s],
+                    root=a["native_root"][s],
+                    offsets=a["native_offsets"][i].astype(np.float64),
+                    rig=rig,
+                )
+            )
+        return out
 
     def records(self) -> list[MotionRecord]:
         feats = self.arrays["features"]
