@@ -41,3 +41,25 @@ def train_tiny(workdir: Path, *extra: str) -> Path:
     ckpts = sorted((workdir / "outputs").glob("train/*/checkpoints/last.ckpt"))
     assert ckpts, "training left no checkpoint"
     return ckpts[-1]
+
+
+def write_kit_layout(root: Path, num_clips: int = 12, seed: int = 0) -> Path:
+    """A root in the official KIT-ML layout (new_joint_vecs/, texts/, Mean/Std, split files) with smooth random
+    251-wide features: no KIT motion is shared, and the loader only needs the layout."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    (root / "new_joint_vecs").mkdir(parents=True)
+    (root / "texts").mkdir()
+    ids = [f"{i:05d}" for i in range(1, num_clips + 1)]
+    for clip_id in ids:
+        n = int(rng.integers(48, 120))
+        feats = np.cumsum(rng.normal(scale=0.1, size=(n, 251)), axis=0).astype(np.float32)
+        np.save(root / "new_joint_vecs" / f"{clip_id}.npy", feats)
+        verb = ("walk", "wave", "jump")[int(clip_id) % 3]
+        (root / "texts" / f"{clip_id}.txt").write_text(f"a person {verb}s.#a/DET person/NOUN {verb}/VERB#0.0#0.0\n")
+    np.save(root / "Mean.npy", np.zeros(251, np.float32))
+    np.save(root / "Std.npy", np.ones(251, np.float32))
+    for split, part in (("train", ids[:8]), ("val", ids[8:10]), ("test", ids[10:])):
+        (root / f"{split}.txt").write_text("\n".join(part) + "\n")
+    return root
