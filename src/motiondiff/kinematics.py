@@ -23,3 +23,23 @@ def forward_kinematics(
             positions[..., j, :] = positions[..., p, :] + qrot(rotations[..., p, :], local_translations[..., j, :])
             rotations[..., j, :] = qmul(rotations[..., p, :], local_rotations[..., j, :])
     return positions, rotations
+
+
+def forward_kinematics_torch(local_rotations, local_translations, parents):
+    """Differentiable FK in torch: local rotation MATRICES (..., J, 3, 3) and translations from the parent
+    (..., J, 3) -> world positions (..., J, 3) and world rotation matrices (..., J, 3, 3). The root's translation
+    is its world position; joints must be ordered parents first. Works in the inputs' dtype and device."""
+    import torch  # imported here so the numpy-only data pipeline does not pay for torch
+
+    shape = torch.broadcast_shapes(local_rotations.shape[:-2], local_translations.shape[:-1])
+    rot = local_rotations.expand(shape + (3, 3))
+    trans = local_translations.expand(shape + (3,))
+    positions, world = [], []  # lists, not in-place writes, so autograd sees a plain graph
+    for j, p in enumerate(parents):
+        if p < 0:
+            positions.append(trans[..., j, :])
+            world.append(rot[..., j, :, :])
+        else:
+            positions.append(positions[p] + (world[p] @ trans[..., j, :, None])[..., 0])
+            world.append(world[p] @ rot[..., j, :, :])
+    return torch.stack(positions, dim=-2), torch.stack(world, dim=-3)

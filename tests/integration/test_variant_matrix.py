@@ -51,7 +51,9 @@ def compose_variant(backbone: str, condition: str, prediction: str):
         return compose("train", overrides=overrides)
 
 
-@pytest.mark.parametrize(("backbone", "condition", "prediction"), list(itertools.product(BACKBONES, CONDITIONS, PREDICTIONS)))
+@pytest.mark.parametrize(
+    ("backbone", "condition", "prediction"), list(itertools.product(BACKBONES, CONDITIONS, PREDICTIONS))
+)
 def test_variant_trains_and_samples(backbone, condition, prediction, datamodule, caption_table, tmp_path):
     cfg = compose_variant(backbone, condition, prediction)
     L.seed_everything(0)
@@ -70,5 +72,7 @@ def test_variant_trains_and_samples(backbone, condition, prediction, datamodule,
     conditions = {"text": ["a person walks forward", "someone waves"], "action": [0, 1], "none": [None, None]}
     cond = condition_batch(module, conditions[condition])
     lengths = torch.tensor([24, 17])
-    out = module.sample(cond, lengths, guidance=2.5, sampler="ddim", steps=3, generator=torch.Generator().manual_seed(0))
+    out = module.sample(
+        cond, lengths, guidance=2.5, sampler="ddim", steps=3, generator=torch.Generator().manual_seed(0)
+    )
     assert out.shape == (2, 24, datamodule.feature_dim) and torch.isfinite(out).all()

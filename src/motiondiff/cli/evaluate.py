@@ -124,9 +124,10 @@ def run(cfg: DictConfig) -> Path:
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
     guidance, steps = _check(cfg, module)  # before any work: bad settings fail at once
-    dm = instantiate(cfg.dataset.datamodule)
+    rep = (module.hparams.get("representation") or {}).get("name")
+    dm = instantiate(cfg.dataset.datamodule, **({"representation": rep} if rep else {}))
     try:
-        evaluators = Evaluators.load(cfg.evaluator_dir, num_joints=module.hparams.num_joints)
+        evaluators = Evaluators.load(cfg.evaluator_dir, num_joints=module.hparams.num_joints).for_module(module)
     except FileNotFoundError as err:
         raise UsageError(str(err)) from None
     if module.condition_kind == "text" and evaluators.text_motion is None:

@@ -15,7 +15,7 @@ from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, find_checkpoint, text_encoder_kwargs, to_dict
 from motiondiff.data.captions import measure
-from motiondiff.data.features import joints_from_features, skeleton_for_dim
+from motiondiff.data.representation_spec import bridge_from_spec
 from motiondiff.eval.behaviour import mean_joint_speed
 from motiondiff.lit.diffusion import MotionDiffusionModule
 
@@ -160,19 +160,22 @@ def run(cfg: DictConfig) -> Path:
 def save_samples(out: Path, prompt: str | None, feats: np.ndarray, module, render: str) -> list[dict]:
     from motiondiff.export.render import render_motion
 
-    skeleton = skeleton_for_dim(feats.shape[-1])
+    rep = module.representation
+    bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
+    skeleton = rep.skeleton
     fps = module.hparams.fps
     rows = []
     for k, f in enumerate(feats):
-        joints = joints_from_features(f)
+        joints = rep.decode_numpy(f).astype(np.float32)  # the representation's skeleton (a rig keeps its joints)
         stem = out / f"{slug(prompt)}_{k:02d}"
         np.save(f"{stem}_joints.npy", joints)
         np.save(f"{stem}_features.npy", f.astype(np.float32))
         video = None
         if render != "none":
             video = render_motion(joints, skeleton, f"{stem}.{render}", title=prompt or "unconditioned", fps=fps)
-        facts = measure(joints, fps)
-        speed = mean_joint_speed(joints, fps)
+        feature_joints = joints if bridge.identity else bridge.joints(f)  # SMPL-22/KIT-21, what `measure` reads
+        facts = measure(feature_joints, fps)
+        speed = mean_joint_speed(feature_joints, fps)
         rows.append(
             {
                 "prompt": prompt,

@@ -51,6 +51,8 @@ def build_module(cfg: DictConfig, dm: MotionDataModule) -> MotionDiffusionModule
         action_names=action_names,
         text_encoder=to_dict(cfg.text_encoder) if kind == "text" else None,
         dataset=cfg.dataset.name,
+        representation=dm.representation_spec(),
+        loss=to_dict(cfg.loss),
     )
 
 

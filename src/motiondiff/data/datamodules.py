@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import abc
 import logging
+from dataclasses import replace
 from pathlib import Path
 
 import lightning as L
@@ -15,9 +16,15 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader, get_worker_info
 
+from motiondiff.data.clip import ClipSplit, LabelledClip
 from motiondiff.data.datasets import MotionDataset, MotionRecord, collate_motion
 from motiondiff.data.humanml3d import HUMANML3D, KIT, OfficialLayout, load_official_split
+from motiondiff.data.joint_map import JointMap
+from motiondiff.data.prepared import PreparedSplit
 from motiondiff.data.prepared import load_split as load_prepared_split
+from motiondiff.data.representation_spec import HMLBridge, bridge_from_spec, representation_spec
+from motiondiff.data.representations import Representation, get_representation
+from motiondiff.skeleton import SMPL22
 
 log = logging.getLogger(__name__)
 
@@ -72,6 +79,14 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
     @property
     def feature_dim(self) -> int:
         return int(self.mean.shape[0])
+
+    def representation_spec(self) -> dict | None:
+        """What a checkpoint stores to decode samples (None: HumanML3D features of `feature_dim`)."""
+        return None
+
+    def evaluation_bridge(self) -> HMLBridge:
+        """Turns this datamodule's features into the HumanML3D features the evaluators read."""
+        return bridge_from_spec(None, self.feature_dim)
 
     def _stats(self) -> tuple[np.ndarray, np.ndarray]:
         if self._mean is None or self._std is None:
@@ -153,7 +168,15 @@ class OfficialLayoutDataModule(MotionDataModule):
         max_frames: int | None = None,
         unit_length: int | None = None,
         seed: int = 0,
+        representation: str | None = None,
     ):
+        native = "hml263" if self.layout.num_joints == 22 else "kit251"
+        if representation not in (None, native):
+            raise ValueError(
+                f"representation={representation}: the official {self.layout.name} layout stores {native} features "
+                f"(new_joint_vecs) only, so use representation={native} (or leave it unset); the rotation and joint-"
+                "position representations need a dataset with rotations (humanact12, uestc, bandai, bvh)"
+            )
         super().__init__(
             batch_size=batch_size,
             num_workers=num_workers,
@@ -187,11 +210,107 @@ class KITDataModule(OfficialLayoutDataModule):
     layout = KIT
 
 
-class PreparedDataModule(MotionDataModule):
+class ClipDataModule(MotionDataModule, abc.ABC):
+    default_representation = "hml263"
+
+    def __init__(
+        self,
+        batch_size: int = 64,
+        num_workers: int = 0,
+        max_frames: int = 196,
+        min_frames: int = 16,
+        unit_length: int = 1,
+        seed: int = 0,
+        representation: str | None = None,
+    ):
+        super().__init__(batch_size, num_workers, max_frames, unit_length, seed)
+        self.min_frames = min_frames
+        self.representation_name = representation or self.default_representation
+        self._splits: dict[str, ClipSplit] = {}
+        self._rep: Representation | None = None
+        self._train_features: list[np.ndarray] | None = None
+
+    @abc.abstractmethod
+    def load_clips(self, split: str) -> ClipSplit:
+        """The clips of `split` ('train', 'val' or 'test')."""
+
+    def joint_map(self) -> JointMap | None:
+        """Rig joints -> feature-skeleton joints, for evaluation of rig representations (None: rig starts with them)."""
+        return None
+
+    # ---- clips and representation ---------------------------------------------------------------------------
+    def clips(self, split: str) -> ClipSplit:
+        if split not in self._splits:
+            self._splits[split] = self.load_clips(split)
+        return self._splits[split]
+
+    @property
+    def representation(self) -> Representation:
+        if self._rep is None:
+            train = self.clips("train")
+            self._rep = get_representation(self.representation_name, train.feature_skeleton, train.rig)
+        return self._rep
+
+    def representation_spec(self) -> dict:
+        return representation_spec(self.representation, self.clips("train").feature_skeleton, self.joint_map())
+
+    def evaluation_bridge(self) -> HMLBridge:
+        """Turns this datamodule's features into the HumanML3D features the evaluators read."""
+        return HMLBridge(self.representation, self.clips("train").feature_skeleton, self.joint_map())
+
+    def encode(self, split: str) -> list[np.ndarray]:
+        """Features of every clip of `split`, not normalised (subclasses may serve precomputed ones)."""
+        rep = self.representation
+        return [rep.encode(c.motion) for c in self.clips(split).clips]
+
+    def load_split(self, split: str) -> SplitData:
+        data = self.clips(split)
+        features = self.encode(split)
+        if split == "train":
+            self._train_features = features
+        records = [
+            MotionRecord(id=c.id, motion=f, texts=list(c.texts), action=c.action, meta=dict(c.meta or {}))
+            for c, f in zip(data.clips, features, strict=True)
+            if len(f) >= self.min_frames
+        ]
+        dropped = len(data.clips) - len(records)
+        if dropped:
+            log.info("%s/%s: %d clip(s) shorter than %d frames left out", type(self).__name__, split, dropped,
+                     self.min_frames)  # fmt: skip
+        mean, std = self.statistics()
+        return records, mean, std
+
+    def statistics(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mean/Std of the train split's features in the chosen representation."""
+        if self._train_features is None:
+            self._train_features = self.encode("train")
+        return self.representation.mean_std(np.concatenate(self._train_features))
+
+    # ---- facts the model is built from ---------------------------------------------------------------------
+    @property
+    def feature_dim(self) -> int:
+        return self.representation.dim
+
+    @property
+    def num_joints(self) -> int:
+        return self.clips("train").feature_skeleton.num_joints
+
+    @property
+    def fps(self) -> float:
+        return float(self.clips("train").fps)
+
+    @property
+    def action_names(self) -> list[str]:
+        return list(self.clips("train").action_names)
+
+
+class PreparedDataModule(ClipDataModule):
     """A folder written by `python -m motiondiff.data.prepare` (Bandai, the embedded bandai_mini, BVH folders).
 
     Clips shorter than `min_frames` are left out of training and evaluation (logged with their count); the
-    captions are GENERATED ones (see motiondiff.data.captions) and each record says so in its meta.
+    captions are GENERATED ones (see motiondiff.data.captions) and each record says so in its meta. HumanML3D
+    features (the default representation) are read as prepared, with the prepared Mean/Std; any other
+    representation is encoded from the stored joints and native rotations.
     """
 
     def __init__(
@@ -203,34 +322,49 @@ class PreparedDataModule(MotionDataModule):
         min_frames: int = 16,
         unit_length: int = 1,
         seed: int = 0,
+        representation: str | None = None,
     ):
-        super().__init__(batch_size, num_workers, max_frames, unit_length, seed)
+        super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation)
         self.root = Path(root)
-        self.min_frames = min_frames
         self.meta: dict = {}
+        self._prepared: dict[str, PreparedSplit] = {}
 
-    def load_split(self, split: str) -> SplitData:
-        data = load_prepared_split(self.root, split)
-        self.meta = data.meta
-        records = [r for r in data.records() if r.length >= self.min_frames]
-        dropped = data.num_clips - len(records)
-        if dropped:
-            log.info("%s/%s: %d clip(s) shorter than %d frames left out", self.root, split, dropped, self.min_frames)
-        return records, data.mean, data.std
+    def prepared(self, split: str) -> PreparedSplit:
+        if split not in self._prepared:
+            self._prepared[split] = load_prepared_split(self.root, split)
+            self.meta = self._prepared[split].meta
+        return self._prepared[split]
 
-    @property
-    def num_joints(self) -> int:
-        return 22
+    def load_clips(self, split: str) -> ClipSplit:
+        data = self.prepared(split)
+        rig = self.prepared("train").rig()
+        clips = [
+            LabelledClip(r.id, replace(c, rig=rig), r.texts, r.action, r.meta)
+            for r, c in zip(data.records(), data.clips(), strict=True)
+        ]
+        names = list(data.meta["labels"]["content"])
+        return ClipSplit(clips, names, fps=float(data.meta.get("fps", 20.0)), feature_skeleton=SMPL22, rig=rig)
 
-    @property
-    def fps(self) -> float:
-        return 20.0
+    def encode(self, split: str) -> list[np.ndarray]:
+        if self.representation_name != "hml263":
+            return super().encode(split)
+        data = self.prepared(split)  # the prepared features: same function, already computed
+        return [data.arrays["features"][data.feature_slice(i)] for i in range(data.num_clips)]
 
-    @property
-    def action_names(self) -> list[str]:
-        if not self.meta:
-            self.dataset("train")
-        return list(self.meta["labels"]["content"])
+    def statistics(self) -> tuple[np.ndarray, np.ndarray]:
+        if self.representation_name != "hml263":
+            return super().statistics()
+        data = self.prepared("train")
+        return data.mean, data.std
+
+    def joint_map(self) -> JointMap | None:
+        """The map the dataset was prepared with: stored in meta.json, or a shipped map named 'source->target'."""
+        self.prepared("train")
+        spec = self.meta.get("joint_map_spec")
+        if spec is not None:
+            return JointMap(**spec)
+        source, target = str(self.meta.get("joint_map", "bandai->smpl22")).split("->")
+        return JointMap.load(f"{source}_to_{target}")
 
 
 def embedded_data_root() -> Path:

@@ -55,6 +55,7 @@ class GenerationEvaluation(L.Callback):
     def setup(self, trainer: L.Trainer, pl_module: L.LightningModule, stage: str) -> None:
         if self.available and self.evaluators is None:
             self.evaluators = Evaluators.load(self.evaluator_dir, num_joints=pl_module.hparams.num_joints)
+            self.evaluators.for_module(pl_module)
 
     def _real_set(self, trainer: L.Trainer, pl_module) -> tuple[EvalClips, dict, list]:
         if self._real is None:

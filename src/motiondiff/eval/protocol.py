@@ -13,6 +13,7 @@ from `replication_metrics`. Which metrics depend on the condition:
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,6 +22,7 @@ import torch
 
 from motiondiff.data.datasets import MotionDataset
 from motiondiff.data.features import joints_from_features
+from motiondiff.data.representation_spec import bridge_from_spec
 from motiondiff.eval import metrics as M
 from motiondiff.eval.evaluators import ActionClassifierGRU, TextMotionEvaluator, load_released, motion_input
 
@@ -84,6 +86,14 @@ class Evaluators:
         self.text_motion, self.action, self.num_joints = text_motion, action, num_joints
         self.meta = meta or {}
         self.batch_size = batch_size
+        # Features of another representation -> the HumanML3D features the evaluators read (None: already those).
+        self.bridge: Callable[[np.ndarray], np.ndarray] | None = None
+
+    def for_module(self, module) -> Evaluators:
+        """Read the features of `module`'s representation (real clips and samples go through the same bridge)."""
+        bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
+        self.bridge = None if bridge.identity else bridge
+        return self
 
     @classmethod
     def load(cls, folder: str | Path, num_joints: int = 22) -> Evaluators:
@@ -105,6 +115,8 @@ class Evaluators:
     def embed_motion(self, features: list[np.ndarray]) -> dict[str, np.ndarray]:
         """De-normalised features of clips -> {"text_motion": (C, E), "action_features": (C, F), "action_logits"}."""
         out: dict[str, list] = {}
+        if self.bridge is not None:
+            features = [self.bridge(f) for f in features]
         for s in range(0, len(features), self.batch_size):
             x, lengths = pad(features[s : s + self.batch_size])
             if self.text_motion is not None:

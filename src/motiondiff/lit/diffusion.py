@@ -12,7 +12,9 @@ import math
 import lightning as L
 import torch
 
+from motiondiff.data.representation_spec import representation_from_spec
 from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, guided_model_fn, make_betas
+from motiondiff.losses import GeometricLoss
 from motiondiff.models.backbones import build_backbone
 from motiondiff.models.conditioning import build_condition
 from motiondiff.models.denoiser import MDMDenoiser
@@ -35,6 +37,8 @@ class MotionDiffusionModule(L.LightningModule):
         action_names: list[str] | None = None,
         text_encoder: dict | None = None,
         dataset: str = "",
+        representation: dict | None = None,
+        loss: dict | None = None,
     ):
         super().__init__()
         self.save_hyperparameters()
@@ -57,6 +61,12 @@ class MotionDiffusionModule(L.LightningModule):
             prediction=diffusion["prediction"],
             weighting=diffusion.get("weighting"),  # None: the prediction type's default (abar_t for v)
         )
+        # How features decode to joints (None: HumanML3D features, as checkpoints from before representations).
+        self.representation = representation_from_spec(representation, feature_dim)
+        lambdas = {k: float(v) for k, v in (loss or {}).items() if k.startswith("lambda_")}
+        self.geometric = GeometricLoss(self.representation, **lambdas) if lambdas else None
+        if self.geometric is not None and not self.geometric.active:
+            self.geometric = None
         self.register_buffer("mean", torch.tensor(mean, dtype=torch.float32))
         self.register_buffer("std", torch.tensor(std, dtype=torch.float32))
         # Caption features of the training data; rebuilt from the text cache at setup, not stored in checkpoints.
@@ -96,7 +106,8 @@ class MotionDiffusionModule(L.LightningModule):
         return None
 
     # ---- training -----------------------------------------------------------------------------------------------
-    def _loss(self, batch: dict, drop_prob: float) -> torch.Tensor:
+    def _loss(self, batch: dict, drop_prob: float) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """Total loss and its parts: the diffusion loss, plus MDM's geometric terms when `loss` enables them."""
         x0, mask = batch["motion"], batch["mask"]
         b = x0.shape[0]
         t = torch.randint(0, self.diffusion.num_steps, (b,), device=x0.device)
@@ -104,18 +115,28 @@ class MotionDiffusionModule(L.LightningModule):
         x_t = self.diffusion.q_sample(x0, t, noise)
         drop = torch.rand(b, device=x0.device) < drop_prob
         out = self.denoiser(x_t, t, cond=self.batch_condition(batch), mask=mask, drop_cond=drop)
-        return self.diffusion.loss(out, x0, noise, t, mask=mask)
+        loss = self.diffusion.loss(out, x0, noise, t, mask=mask)
+        parts = {"diffusion": loss.detach()}
+        if self.geometric is not None:
+            x0_hat = self.diffusion.to_x0(out.float(), x_t.float(), t)
+            geo, terms = self.geometric(x0_hat, x0, mask, self.mean, self.std)
+            loss = loss + geo
+            parts.update(terms)
+        return loss, parts
 
     def training_step(self, batch: dict, batch_idx: int) -> torch.Tensor:
-        loss = self._loss(batch, self.cond_drop_prob)
-        self.log("train/loss", loss, prog_bar=True, batch_size=batch["motion"].shape[0])
+        loss, parts = self._loss(batch, self.cond_drop_prob)
+        b = batch["motion"].shape[0]
+        self.log("train/loss", loss, prog_bar=True, batch_size=b)
+        if len(parts) > 1:
+            self.log_dict({f"train/loss_{k}": v for k, v in parts.items()}, batch_size=b)
         return loss
 
     def validation_step(self, batch: dict, batch_idx: int) -> None:
         # A fixed generator per batch makes the validation loss comparable between evaluations.
         state = torch.get_rng_state()
         torch.manual_seed(batch_idx)
-        loss = self._loss(batch, 0.0)
+        loss, _ = self._loss(batch, 0.0)
         torch.set_rng_state(state)
         self.log("val/loss", loss, prog_bar=True, batch_size=batch["motion"].shape[0], sync_dist=True)
 
@@ -183,6 +204,10 @@ class MotionDiffusionModule(L.LightningModule):
 
     def denormalise(self, features: torch.Tensor) -> torch.Tensor:
         return features * self.std + self.mean
+
+    def joints(self, features: torch.Tensor) -> torch.Tensor:
+        """De-normalised features (..., N, D) -> joint positions (..., N, J, 3) of `self.representation.skeleton`."""
+        return self.representation.decode(features.float())
 
 
 def _backbone_kwargs(model: dict, backbone: dict) -> dict:

@@ -1,0 +1,73 @@
+"""MDM's geometric losses (MDM §3 eq. 2–4, used by vvMDM too), for any representation.
+
+With x0 the clean motion, x̂0 the network's estimate of it (converted from ε or v when the network predicts those),
+both de-normalised, and FK = the representation's decode to joint positions (metres):
+
+    L_pos  = mean ‖FK(x0) − FK(x̂0)‖²
+    L_vel  = mean ‖(x0_{i+1} − x0_i) − (x̂0_{i+1} − x̂0_i)‖²          on the normalised features (L_simple's space)
+    L_foot = mean ‖(FK(x̂0)_{i+1} − FK(x̂0)_i) · f_i‖²                 f_i: ground-truth contacts of the feet joints
+    L = L_diffusion + λ_pos L_pos + λ_vel L_vel + λ_foot L_foot
+
+Means run over valid frames only (frame pairs for the two velocity terms); each sample counts once in the batch.
+The geometric terms are not scaled by the diffusion loss weight w(t) (MDM adds them unweighted).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+
+from motiondiff.diffusion.process import masked_mean_per_sample
+
+
+@dataclass
+class GeometricLoss:
+    representation: object  # motiondiff.data.representations.Representation
+    lambda_pos: float = 1.0
+    lambda_vel: float = 1.0
+    lambda_foot: float = 1.0
+
+    @property
+    def active(self) -> bool:
+        return any(w > 0 for w in (self.lambda_pos, self.lambda_vel, self.lambda_foot))
+
+    def terms(
+        self,
+        x0_hat: torch.Tensor,
+        x0: torch.Tensor,
+        mask: torch.Tensor,
+        mean: torch.Tensor,
+        std: torch.Tensor,
+    ) -> dict[str, torch.Tensor]:
+        """Per-sample terms (B,) from normalised x̂0 and x0 (B, N, D) and the valid-frame mask (B, N)."""
+        rep = self.representation
+        out: dict[str, torch.Tensor] = {}
+        pair_mask = mask[:, 1:] & mask[:, :-1]
+        if self.lambda_vel > 0:
+            dv = (x0[:, 1:] - x0[:, :-1]) - (x0_hat[:, 1:] - x0_hat[:, :-1])
+            out["vel"] = masked_mean_per_sample(dv**2, pair_mask)
+        if self.lambda_pos > 0 or self.lambda_foot > 0:
+            # FK in float32 even under bf16 autocast: positions integrate velocities over frames.
+            with torch.autocast(device_type=x0.device.type, enabled=False):
+                raw_hat = x0_hat.float() * std + mean
+                pos_hat = rep.decode(raw_hat)
+                raw = x0.float() * std + mean
+                with torch.no_grad():
+                    pos = rep.decode(raw)
+                if self.lambda_pos > 0:
+                    out["pos"] = masked_mean_per_sample(((pos - pos_hat) ** 2).sum(-1), mask)
+                if self.lambda_foot > 0:
+                    with torch.no_grad():
+                        contacts = rep.foot_contacts(raw)[:, :-1]  # (B, N-1, F): contact at frame i
+                    feet = pos_hat[:, :, list(rep.contact_joints)]
+                    slide = ((feet[:, 1:] - feet[:, :-1]) ** 2).sum(-1) * contacts
+                    out["foot"] = masked_mean_per_sample(slide, pair_mask)
+        return out
+
+    def __call__(self, x0_hat, x0, mask, mean, std) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """(λ-weighted sum averaged over the batch, {term: batch mean}) for logging."""
+        terms = self.terms(x0_hat, x0, mask, mean, std)
+        weights = {"pos": self.lambda_pos, "vel": self.lambda_vel, "foot": self.lambda_foot}
+        total = sum(weights[k] * v.mean() for k, v in terms.items())
+        return total, {k: v.mean().detach() for k, v in terms.items()}
