@@ -76,3 +76,31 @@ def test_variant_trains_and_samples(backbone, condition, prediction, datamodule,
         cond, lengths, guidance=2.5, sampler="ddim", steps=3, generator=torch.Generator().manual_seed(0)
     )
     assert out.shape == (2, 24, datamodule.feature_dim) and torch.isfinite(out).all()
+
+
+@pytest.mark.parametrize("representation", ["hml263", "jp", "rp6jr", "rpqjr", "rpajr", "rpejr", "rpmjr"])
+def test_representation_with_geometric_loss_trains_and_samples(representation, tmp_path):
+    """`representation=<name> loss=geometric diffusion=v` (vvMDM) trains, logs its loss terms, samples and decodes."""
+    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
+        cfg = compose("train", overrides=["condition=action", "diffusion=v", "loss=geometric",
+                                          f"representation={representation}", *TINY[:4]])  # fmt: skip
+    dm = PreparedDataModule(embedded_data_root(), batch_size=8, max_frames=40, representation=representation)
+    dm.setup("fit")
+    L.seed_everything(0)
+    module = build_module(cfg, dm)
+    assert module.geometric is not None and module.representation.name == representation
+    logged = {}
+
+    class Grab(L.Callback):
+        def on_train_batch_end(self, trainer, *args):
+            logged.update({k: float(v) for k, v in trainer.callback_metrics.items()})
+
+    trainer = L.Trainer(max_steps=2, logger=False, enable_checkpointing=False, enable_progress_bar=False,
+                        enable_model_summary=False, limit_val_batches=0, callbacks=[Grab()],
+                        default_root_dir=tmp_path)  # fmt: skip
+    trainer.fit(module, train_dataloaders=dm.train_dataloader())
+    assert {"train/loss_diffusion", "train/loss_pos", "train/loss_vel", "train/loss_foot"} <= set(logged)
+    out = module.sample(torch.tensor([0, 1]), torch.tensor([20, 20]), sampler="ddim", steps=2,
+                        generator=torch.Generator().manual_seed(0))  # fmt: skip
+    joints = module.joints(module.denormalise(out))
+    assert joints.shape == (2, 20, module.representation.skeleton.num_joints, 3) and torch.isfinite(joints).all()
