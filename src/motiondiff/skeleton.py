@@ -337,7 +337,42 @@ KIT21 = Skeleton(
     chains=KIT21_CHAINS,
 )
 
-SKELETONS = {"smpl22": SMPL22, "kit21": KIT21}
+# ---- SMPL 24 joints (the SMPL body model's rig: HumanAct12, UESTC) ------------------------------------------------
+# The first 22 joints are SMPL-22, so rig positions map to the feature skeleton by truncation.
+SMPL24_NAMES = SMPL22_NAMES + ("l_hand", "r_hand")
+# Approximate rest offsets of the SMPL neutral template (metres; x body-left, y up, z forward), rounded from the
+# values EDGE publishes for its fixed SMPL skeleton. The SMPL model itself is licensed and not shipped; datasets
+# replace these with offsets recovered from their own joints (see motiondiff.data.smpl_clips).
+SMPL24_REST_OFFSETS = np.array(
+    [[0.0, 0.0, 0.0], [0.0586, -0.0823, -0.0177], [-0.0603, -0.0905, -0.0135], [0.0044, 0.1244, -0.0384],
+     [0.0435, -0.3865, 0.0080], [-0.0433, -0.3837, -0.0048], [0.0045, 0.1380, 0.0268], [-0.0148, -0.4269, -0.0374],
+     [0.0191, -0.4200, -0.0346], [-0.0023, 0.0560, 0.0029], [0.0411, -0.0603, 0.1220], [-0.0348, -0.0621, 0.1303],
+     [-0.0134, 0.2116, -0.0335], [0.0717, 0.1140, -0.0189], [-0.0830, 0.1125, -0.0237], [0.0101, 0.0889, 0.0504],
+     [0.1229, 0.0452, -0.0190], [-0.1132, 0.0469, -0.0085], [0.2553, -0.0156, -0.0229], [-0.2601, -0.0144, -0.0313],
+     [0.2657, 0.0127, -0.0074], [-0.2691, 0.0068, -0.0060], [0.0867, -0.0106, -0.0156], [-0.0888, -0.0087, -0.0101]]
+)  # fmt: skip
+
+SMPL24 = Skeleton(
+    name="smpl24",
+    joint_names=SMPL24_NAMES,
+    parents=(-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21),
+    offsets=SMPL24_REST_OFFSETS,
+    foot_joints=((7, 10), (8, 11)),
+    parts=_standard_parts(
+        root=0,
+        torso=(3, 6, 9),
+        head=(12, 15),
+        left_arm=(13, 16, 18, 20, 22),
+        right_arm=(14, 17, 19, 21, 23),
+        left_leg=(1, 4, 7, 10),
+        right_leg=(2, 5, 8, 11),
+    ),  # fmt: skip
+    face_joints=(2, 1, 17, 16),
+    leg_joints=(5, 8),
+    fps=20.0,
+)
+
+SKELETONS = {"smpl22": SMPL22, "kit21": KIT21, "smpl24": SMPL24}
 
 
 def get_skeleton(name: str) -> Skeleton:

@@ -44,6 +44,13 @@ CONTENT_PHRASES = {
     "raise-up-both-hands": "raises both hands",
     "raise-up-left-hand": "raises the left hand",
     "raise-up-right-hand": "raises the right hand",
+    # 100STYLE's content codes (motiondiff.data.prepare_bvh) and unlabelled BVH files
+    "run-back": "runs backward",
+    "sidestep-walk": "walks sideways",
+    "sidestep-run": "runs sideways",
+    "idle": "stands in place",
+    "transition": "moves, switching between gaits",
+    "unlabelled": "moves",
 }
 
 # Style labels -> adverbial phrase ("" for the neutral style).
@@ -67,6 +74,7 @@ STYLE_PHRASES = {
     "musical": "rhythmically, as in a musical",
     "giant": "heavily, like a giant",
     "chimpira": "with a swagger, like a street thug",
+    "unlabelled": "",
 }
 
 

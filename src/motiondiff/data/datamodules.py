@@ -358,13 +358,52 @@ class PreparedDataModule(ClipDataModule):
         return data.mean, data.std
 
     def joint_map(self) -> JointMap | None:
-        """The map the dataset was prepared with: stored in meta.json, or a shipped map named 'source->target'."""
+        """The map the dataset was prepared with: its joint_map.json (BVH folders), or the shipped 'source_to_target'."""
         self.prepared("train")
-        spec = self.meta.get("joint_map_spec")
-        if spec is not None:
-            return JointMap(**spec)
+        if (self.root / "joint_map.json").is_file():
+            return JointMap.load(self.root / "joint_map.json")
         source, target = str(self.meta.get("joint_map", "bandai->smpl22")).split("->")
         return JointMap.load(f"{source}_to_{target}")
+
+
+class BVHDataModule(PreparedDataModule):
+    """Any folder or zip of BVH files (100STYLE, Bandai, your own capture) with an optional labels CSV.
+
+    The files are prepared once into `cache` (`python -m motiondiff.data.prepare bvh` does the same by hand; see
+    motiondiff.data.prepare_bvh for the labels format and how labels are read from paths) and reused while the
+    sources and options stay the same.
+    """
+
+    def __init__(
+        self,
+        src: str | Path,
+        cache: str | Path,
+        labels: str | Path | None = None,
+        joint_map: str = "auto",
+        max_clip_frames: int | None = None,
+        batch_size: int = 64,
+        num_workers: int = 0,
+        max_frames: int = 196,
+        min_frames: int = 16,
+        seed: int = 0,
+        representation: str | None = None,
+    ):
+        super().__init__(cache, batch_size, num_workers, max_frames, min_frames, 1, seed, representation)
+        self.src, self.labels, self.joint_map_spec, self.max_clip_frames = src, labels, joint_map, max_clip_frames
+
+    def prepared(self, split: str) -> PreparedSplit:
+        if not self._prepared:
+            from motiondiff.data.errors import DatasetNotFoundError
+            from motiondiff.data.prepare_bvh import ensure_prepared_bvh
+
+            if not Path(self.src).exists():
+                raise DatasetNotFoundError(
+                    self.src, dataset="bvh", how_to_get="any motion capture exported as BVH (100STYLE, Bandai, ...)",
+                    layout="  <src>/**/*.bvh (a folder or a .zip), optional labels CSV: file,action,style,caption",
+                )  # fmt: skip
+            ensure_prepared_bvh(self.src, self.root, labels=self.labels, joint_map=self.joint_map_spec,
+                                max_frames=self.max_clip_frames, seed=self.seed)  # fmt: skip
+        return super().prepared(split)
 
 
 def embedded_data_root() -> Path:

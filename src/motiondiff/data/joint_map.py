@@ -40,6 +40,38 @@ class JointMap:
             raise ValueError(f"joint map {path} does not define target joints {missing}")
         return cls(spec["source"], spec["target"], float(spec["units_to_metres"]), spec["joints"])
 
+    @classmethod
+    def infer(
+        cls,
+        source_names,
+        parents,
+        units_to_metres: float | None = None,
+        *,
+        offsets: np.ndarray | None = None,
+        source: str = "bvh",
+    ) -> JointMap:
+        """Guess the SMPL-22 map of a skeleton from its joint names (see motiondiff.data.joint_infer for the
+        conventions read and the unit guess). `offsets` (J, 3) rest offsets are needed to guess the units when
+        `units_to_metres` is not given; they also let joints that sit on their parent (zero offset, as CMU's
+        LowerBack or Neck) be skipped. Raises one ValueError naming every SMPL joint that cannot be matched."""
+        from motiondiff.data.joint_infer import guess_units, infer_smpl22
+
+        joints = infer_smpl22(list(source_names), [int(p) for p in parents], offsets)
+        if units_to_metres is None:
+            if offsets is None:
+                raise ValueError("JointMap.infer: pass units_to_metres, or offsets to guess the units from")
+            units_to_metres = guess_units(list(source_names), [int(p) for p in parents], offsets, joints)
+        return cls(source, "smpl22", float(units_to_metres), joints)
+
+    def source_joints(self) -> set[str]:
+        """Every source joint the map reads (a skeleton lacking one cannot be mapped)."""
+        return {s for names in self.joints.values() for s in names}
+
+    def to_json(self) -> dict:
+        """The map in the format of the shipped JSON files (what --joint-map path.json reads)."""
+        return {"source": self.source, "target": self.target, "units_to_metres": self.units_to_metres,
+                "joints": self.joints}  # fmt: skip
+
     def weights(self, source_names: list[str]) -> np.ndarray:
         """(J_target, J_source) averaging matrix for a source skeleton with these joint names."""
         target = get_skeleton(self.target)

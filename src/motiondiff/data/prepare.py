@@ -2,6 +2,8 @@
 
     python -m motiondiff.data.prepare bandai --src bandai-ds1.zip --src bandai-ds2.zip --out data/bandai
     python -m motiondiff.data.prepare bandai --src ... --out data/bandai_mini --per-group 1 --max-frames 120 --compact
+    python -m motiondiff.data.prepare bvh --src 100STYLE.zip --out data/100style          (see prepare_bvh)
+    python -m motiondiff.data.prepare bvh --src mocap/ --labels labels.csv --joint-map auto --out data/mocap
 
 Every clip is read; each one that cannot be used is named with its reason; counts per split and label are printed
 and saved in report.json. Files are written to temporary names and renamed, so an interrupted run leaves either
@@ -57,16 +59,19 @@ _SOURCES: dict[str, Source] = {}
 _JOINT_MAP: JointMap | None = None
 
 
-def _init_worker(map_name: str) -> None:
+def _init_worker(joint_map: JointMap) -> None:
     global _JOINT_MAP
-    _JOINT_MAP = JointMap.load(map_name)
+    _JOINT_MAP = joint_map
 
 
 def _process(job: Job) -> ProcessedClip | str:
     """The processed clip, or the reason it cannot be used."""
     try:
-        source = _SOURCES.setdefault(job.source, Source(job.source))
+        source = _SOURCES.get(job.source) or _SOURCES.setdefault(job.source, Source(job.source))
         motion = parse_bvh(source.read_text(job.bvh_name), source=job.bvh_name)
+        lacking = sorted(_JOINT_MAP.source_joints() - set(motion.joint_names))
+        if lacking:
+            return f"its skeleton lacks {', '.join(lacking)}, which the joint map {_JOINT_MAP.source} reads"
         clip = process_motion(motion, _JOINT_MAP)
         if job.max_frames is not None and len(clip.joints) > job.max_frames:
             clip = process_motion(motion, _JOINT_MAP, window=most_active_window(clip.joints, job.max_frames))
@@ -108,13 +113,29 @@ def prepare_bandai(
         skipped += [(s.name, s.reason) for s in bad]
     if not clips:
         raise PrepareError("no usable clips in " + ", ".join(map(str, sources)))
+    options = {"compact": compact, "per_group": per_group, "max_frames": max_frames, "seed": seed}
+    meta = {"captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}
+    report = process_and_write(clips, skipped, sources, out, joint_map, options, meta, workers, progress)
+    _write_license_and_readme(out, sources, report)
+    return report
+
+
+def process_and_write(
+    clips, skipped, sources, out: Path, joint_map: JointMap, options: dict, meta: dict, workers=None, progress=True
+) -> dict:
+    """Shared by every source: subset, process in workers, split, write the npz files, Mean/Std, report.json and
+    meta.json (`meta` adds to it). `clips` have name, dataset, content, style, source, bvh_name and optionally
+    `captions` (human-written; None = generate). `options` holds compact, per_group, max_frames, seed and any
+    source-specific settings, all saved in the report. Returns the report."""
+    per_group, max_frames, compact, seed = (options[k] for k in ("per_group", "max_frames", "compact", "seed"))
+    skipped = list(skipped)
     groups = [(c.dataset, c.content, c.style) for c in clips]
     if per_group is not None:
         keep = stratified_subset([c.name for c in clips], groups, per_group, seed)
         clips, groups = [clips[i] for i in keep], [groups[i] for i in keep]
 
     jobs = [Job(str(c.source.path), c.bvh_name, c.name, max_frames) for c in clips]
-    results = _run(jobs, "bandai_to_smpl22", workers, progress)
+    results = _run(jobs, joint_map, workers, progress)
     kept = []
     for clip, group, res in zip(clips, groups, results, strict=True):
         if isinstance(res, str):
@@ -122,6 +143,9 @@ def prepare_bandai(
         else:
             kept.append((clip, group, res))
     kept, skipped = _same_skeleton(kept, skipped)
+    if not kept:
+        reasons = "; ".join(f"{n}: {r}" for n, r in skipped[:5])
+        raise PrepareError(f"none of the {len(clips)} clip(s) could be used ({reasons})")
     split_of = stratified_split([c.name for c, _, _ in kept], [g for _, g, _ in kept], seed)
 
     labels = {k: sorted({getattr(c, k) for c, _, _ in kept}) for k in ("dataset", "content", "style")}
@@ -133,23 +157,31 @@ def prepare_bandai(
         save_split(out / f"{s}.npz", arrays[s], compact=compact)
     for name, arr in (("Mean.npy", mean), ("Std.npy", std)):
         atomic_write(out / name, lambda tmp, a=arr: np.save(tmp, a), suffix=".npy")
-    report = _report(per_split, skipped, sources, joint_map, compact, per_group, max_frames, seed)
+    report = _report(per_split, skipped, sources, joint_map, options)
     meta = {**{k: v for k, v in report.items() if k not in ("skipped",)}, "labels": labels, "fps": TARGET_FPS,
-            "captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}  # fmt: skip
+            **meta}  # fmt: skip
+    # meta.json last: its presence marks a complete dataset (check_output, ensure_prepared_bvh)
     for name, obj in (("report.json", report), ("meta.json", meta)):
         atomic_write(out / name, lambda tmp, o=obj: Path(tmp).write_text(json.dumps(o, indent=1)), suffix=".json")
-    _write_license_and_readme(out, sources, report)
     return report
 
 
-def _write_license_and_readme(out: Path, sources, report: dict) -> None:
-    """The data's license travels with every copy of it (CC BY-NC 4.0 requires the attribution)."""
+def copy_license(out: Path | None, sources) -> str | None:
+    """The data's license travels with every copy of it (CC BY-NC 4.0 requires the attribution): the first
+    LICENSE file at the top of a source is copied into `out` (None: only looked for); returns where it was."""
     for path in sources:
         src = Source(path)
-        if src.exists("LICENSE"):
-            text = src.read_text("LICENSE")
-            atomic_write(out / "LICENSE", lambda tmp, t=text: Path(tmp).write_text(t), suffix="")
-            break
+        for name in ("LICENSE", "LICENSE.txt", "LICENSE.md", "license.txt"):
+            if src.exists(name):
+                if out is not None:
+                    text = src.read_text(name)
+                    atomic_write(out / "LICENSE", lambda tmp, t=text: Path(tmp).write_text(t), suffix="")
+                return f"{Path(path).name}/{name}"
+    return None
+
+
+def _write_license_and_readme(out: Path, sources, report: dict) -> None:
+    copy_license(out, sources)
     opts = report["options"]
     cmd = "python -m motiondiff.data.prepare bandai " + " ".join(f"--src {Path(p).name}" for p in sources)
     cmd += f" --out {out.name}"
@@ -173,13 +205,13 @@ Rebuilt with (from the folder holding the zips; in a motiondiff checkout `make d
     atomic_write(out / "README.md", lambda tmp: Path(tmp).write_text(text), suffix=".md")
 
 
-def _run(jobs: list[Job], map_name: str, workers: int | None, progress: bool) -> list:
+def _run(jobs: list[Job], joint_map: JointMap, workers: int | None, progress: bool) -> list:
     workers = workers if workers is not None else min(4, os.cpu_count() or 1)
     bar = dict(total=len(jobs), desc="prepare", unit="clip", disable=not progress)
     if workers <= 1:
-        _init_worker(map_name)
+        _init_worker(joint_map)
         return [_process(j) for j in tqdm(jobs, **bar)]
-    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(map_name,)) as pool:
+    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(joint_map,)) as pool:
         return list(tqdm(pool.map(_process, jobs, chunksize=8), **bar))
 
 
@@ -201,8 +233,13 @@ def _split_arrays(items: list[tuple[bandai.BandaiClip, ProcessedClip]], labels: 
     if not items:
         raise PrepareError("a split came out empty: too few clips were selected (raise --per-group)")
     lengths = np.array([len(r.joints) for _, r in items])
-    captions = []
+    captions, generated = [], []
     for c, r in items:
+        given = getattr(c, "captions", None)  # human-written captions of a labels file
+        generated.append(not given)
+        if given:
+            captions.append(list(given))
+            continue
         rng = np.random.default_rng(int.from_bytes(f"{seed}:{c.name}".encode()[:8].ljust(8, b"\0"), "little"))
         captions.append(generate_captions(c.content, c.style, r.facts, rng))
     native = items[0][1].native
@@ -218,7 +255,8 @@ def _split_arrays(items: list[tuple[bandai.BandaiClip, ProcessedClip]], labels: 
         "native_offsets": np.stack([r.native.offsets for _, r in items]).astype(np.float32),
         "captions": np.array([t for caps in captions for t in caps]),
         "caption_offsets": np.concatenate([[0], np.cumsum([len(caps) for caps in captions])]),
-        "captions_generated": np.array(True),
+        # one flag while all clips agree (the Bandai files), else one per clip
+        "captions_generated": np.array(generated[0] if len(set(generated)) == 1 else generated),
         "fps": np.array(TARGET_FPS),
     }
     for kind in ("dataset", "content", "style"):
@@ -229,7 +267,7 @@ def _split_arrays(items: list[tuple[bandai.BandaiClip, ProcessedClip]], labels: 
     return arrays
 
 
-def _report(per_split, skipped, sources, joint_map, compact, per_group, max_frames, seed) -> dict:
+def _report(per_split, skipped, sources, joint_map, options: dict) -> dict:
     def count(kind):
         return {s: dict(sorted(Counter(getattr(c, kind) for c, _ in per_split[s]).items())) for s in SPLITS}
 
@@ -242,7 +280,7 @@ def _report(per_split, skipped, sources, joint_map, compact, per_group, max_fram
         "per_style": count("style"),
         "skipped": [{"clip": n, "reason": r} for n, r in skipped],
         "joint_map": f"{joint_map.source}->{joint_map.target}",
-        "options": {"compact": compact, "per_group": per_group, "max_frames": max_frames, "seed": seed},
+        "options": dict(options),
     }
 
 
@@ -264,29 +302,37 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="dataset", required=True)
     b = sub.add_parser("bandai", help="Bandai Namco Research Motion Dataset 1/2 (zips or unzipped folders)")
     b.add_argument("--src", action="append", required=True, help="a release zip or folder (repeat for several)")
-    b.add_argument("--out", required=True, help="output folder")
-    b.add_argument("--per-group", type=int, help="keep at most N clips per dataset x content x style (subset)")
-    b.add_argument("--max-frames", type=int, help="crop longer clips to their most active N frames (at 20 fps)")
-    b.add_argument("--compact", action="store_true", help="leave out derived arrays (recomputed on load)")
-    b.add_argument("--seed", type=int, default=0)
-    b.add_argument("--workers", type=int, help="processes (default: up to 4)")
-    b.add_argument("--force", action="store_true", help="replace a prepared dataset already in --out")
+    add_common_arguments(b)
+    v = sub.add_parser("bvh", help="any folder or zip of BVH files, with an optional labels CSV (100STYLE, ...)")
+    v.add_argument("--src", action="append", required=True, help="a folder or zip of .bvh files (repeat for several)")
+    v.add_argument("--labels", help="CSV with a header: file (required), action, style, caption (several: a|b)")
+    v.add_argument("--joint-map", default="auto", help="auto (from joint names), a shipped map name or path.json")
+    v.add_argument("--units-to-metres", type=float, help="factor from file units to metres (default: guessed)")
+    add_common_arguments(v)
     return parser
+
+
+def add_common_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--per-group", type=int, help="keep at most N clips per dataset x content x style (subset)")
+    p.add_argument("--max-frames", type=int, help="crop longer clips to their most active N frames (at 20 fps)")
+    p.add_argument("--compact", action="store_true", help="leave out derived arrays (recomputed on load)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=int, help="processes (default: up to 4)")
+    p.add_argument("--force", action="store_true", help="replace a prepared dataset already in --out")
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    common = dict(per_group=args.per_group, max_frames=args.max_frames, compact=args.compact, seed=args.seed,
+                  workers=args.workers, force=args.force)  # fmt: skip
     try:
-        report = prepare_bandai(
-            args.src,
-            args.out,
-            args.per_group,
-            args.max_frames,
-            args.compact,
-            args.seed,
-            args.workers,
-            args.force,
-        )
+        if args.dataset == "bvh":
+            from motiondiff.data.prepare_bvh import prepare_bvh  # it imports this module
+
+            report = prepare_bvh(args.src, args.out, args.labels, args.joint_map, args.units_to_metres, **common)
+        else:
+            report = prepare_bandai(args.src, args.out, **common)
     except (PrepareError, SourceError, bandai.BandaiLayoutError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

@@ -10,7 +10,9 @@ each clip starts. Arrays (C clips, F frames in all, J native joints):
     native_rotations (F, J, 4), native_root (F, 3) local joint quaternions (w,x,y,z) + root position
     native_positions (F, J, 3)                     FK of the above, metres                          [derived]
     native_joint_names, native_parents (J), native_offsets (C, J, 3)   bone offsets per clip (performers differ)
-    captions (K), caption_offsets (C+1)            GENERATED captions (captions_generated = True)
+    captions (K), caption_offsets (C+1)            captions; GENERATED ones are flagged by captions_generated:
+    captions_generated ()  or (C)                   one flag for all clips, or one per clip where a labels file
+                                                   gave human-written captions for some (the `bvh` source)
 
 "[derived]" arrays may be left out ("compact", used for the embedded dataset to stay small): loading recomputes
 them with the very same functions that made them, so both forms load to identical arrays.
@@ -69,6 +71,10 @@ class PreparedSplit:
         o = self.arrays["caption_offsets"]
         return [str(c) for c in self.arrays["captions"][o[i] : o[i + 1]]]
 
+    def captions_generated(self, i: int) -> bool:
+        flags = np.asarray(self.arrays.get("captions_generated", True))
+        return bool(flags if flags.ndim == 0 else flags[i])
+
     def label(self, kind: str, i: int) -> str:
         return str(self.arrays[f"{kind}_names"][self.arrays[kind][i]])
 
@@ -107,7 +113,7 @@ class PreparedSplit:
                 meta={
                     "content": self.label("content", i),
                     "style": self.label("style", i),
-                    "captions_generated": True,
+                    "captions_generated": self.captions_generated(i),
                 },
             )
             for i in range(self.num_clips)

@@ -13,12 +13,13 @@ evaluator trains.
 from __future__ import annotations
 
 import functools
-import pickle
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from motiondiff.safe_pickle import BUILTIN_DATA, load_pickle
 
 POS_CATEGORIES = ("VERB", "NOUN", "DET", "ADP", "NUM", "AUX", "PRON", "ADJ", "ADV",
                   "Loc_VIP", "Body_VIP", "Obj_VIP", "Act_VIP", "Desc_VIP", "OTHER")  # fmt: skip
@@ -110,13 +111,6 @@ class Vocabulary:
         return ids, pos
 
 
-class _PlainUnpickler(pickle.Unpickler):
-    """The GloVe word list and index are plain lists/dicts: refuse anything that would import code."""
-
-    def find_class(self, module, name):
-        raise pickle.UnpicklingError(f"{module}.{name} is not allowed in a word-vector file (only plain data)")
-
-
 def load_glove(folder: str | Path, prefix: str = "our_vab") -> tuple[Vocabulary, np.ndarray]:
     """The official evaluator's GloVe files: `<prefix>_data.npy` (V, 300) and `<prefix>_idx.pkl` (word -> row)."""
     folder = Path(folder)
@@ -127,8 +121,7 @@ def load_glove(folder: str | Path, prefix: str = "our_vab") -> tuple[Vocabulary,
             f"GloVe files {missing} not found in {folder}: put the official text-to-motion `glove/` folder there"
         )
     vectors = np.load(paths[0], allow_pickle=False).astype(np.float32)
-    with open(paths[1], "rb") as f:
-        index = _PlainUnpickler(f).load()
+    index = load_pickle(paths[1], allowed=BUILTIN_DATA)  # a plain word -> row dict: nothing may import code
     words = [None] * len(index)
     for w, i in index.items():
         words[i] = w

@@ -1,0 +1,42 @@
+"""Datamodules of the action datasets MDM and ACTOR use, in their pickled layouts (HumanAct12, UESTC).
+
+Both store SMPL rotations, so every representation works; MDM trains them on 6D rotations + root (rp6jr, the
+default here). Captions are GENERATED from the action names (marked so in each record's meta).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from motiondiff.data.clip import ClipSplit
+from motiondiff.data.datamodules import ClipDataModule
+from motiondiff.data.humanact12 import load_humanact12
+from motiondiff.data.uestc import load_uestc
+
+
+class HumanAct12DataModule(ClipDataModule):
+    """`<root>/humanact12poses.pkl` (ACTOR's HumanAct12Poses); see motiondiff.data.humanact12 for the layout."""
+
+    default_representation = "rp6jr"
+
+    def __init__(self, root: str | Path, batch_size: int = 64, num_workers: int = 0, max_frames: int = 60,
+                 min_frames: int = 16, seed: int = 0, representation: str | None = None):  # fmt: skip
+        super().__init__(batch_size, num_workers, max_frames, min_frames, 1, seed, representation)
+        self.root = Path(root)
+
+    def load_clips(self, split: str) -> ClipSplit:
+        return load_humanact12(self.root, split)
+
+
+class UESTCDataModule(ClipDataModule):
+    """`<root>/vibe_cache_refined.pkl` + `<root>/info/` (ACTOR's UESTC); cross-subject split as ACTOR reads it."""
+
+    default_representation = "rp6jr"
+
+    def __init__(self, root: str | Path, batch_size: int = 64, num_workers: int = 0, max_frames: int = 60,
+                 min_frames: int = 16, seed: int = 0, representation: str | None = None):  # fmt: skip
+        super().__init__(batch_size, num_workers, max_frames, min_frames, 1, seed, representation)
+        self.root = Path(root)
+
+    def load_clips(self, split: str) -> ClipSplit:
+        return load_uestc(self.root, split, num_frames=self.max_frames)
