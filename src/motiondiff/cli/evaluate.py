@@ -69,7 +69,7 @@ def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict,
             captions = test.pick_captions(rng)
             text = evaluators.embed_text(captions) if kind == "text" else None
             reps["Real"].append(replication_metrics(kind, evaluators, real_train, real_test, text=text,
-                                                    actions=test.actions, generated_features=test.features,
+                                                    actions=test.actions, generated_features=evaluators.as_hml(test.features),
                                                     seed=seed, **common))  # fmt: skip
             generator = torch.Generator(device=module.device).manual_seed(seed)
             start = time.perf_counter()
@@ -78,7 +78,8 @@ def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict,
             timings["generation_s"] += time.perf_counter() - start
             timings["motions"] += len(feats)
             values = replication_metrics(kind, evaluators, real_test, evaluators.embed_motion(feats), text=text,
-                                         actions=test.actions, generated_features=feats, seed=seed, **common)  # fmt: skip
+                                         actions=test.actions, generated_features=evaluators.as_hml(feats), seed=seed,
+                                         **common)  # fmt: skip
             if kind != "none" and r < cfg.mm_replications:
                 values["multimodality"] = _multimodality(cfg, module, evaluators, test, captions, mm_n, seed,
                                                          bar, sampling, timings)  # fmt: skip
@@ -119,13 +120,21 @@ def _log_wandb(out: Path, cfg: DictConfig, rows: dict, extra: dict) -> None:
 def run(cfg: DictConfig) -> Path:
     from motiondiff.cli.sample import load_module
 
-    wall = time.perf_counter()
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
-    guidance, steps = _check(cfg, module)  # before any work: bad settings fail at once
+    _check(cfg, module)  # before any work: bad settings fail at once
     rep = (module.hparams.get("representation") or {}).get("name")
     dm = instantiate(cfg.dataset.datamodule, **({"representation": rep} if rep else {}))
+    report_evaluation(cfg, module, dm, out, str(ckpt))
+    return out
+
+
+def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> dict:
+    """Evaluate `module` on `dm` with the evaluate.yaml settings in `cfg` and write table.md, table.csv and
+    metrics.json (+ an offline W&B run) to `out`; returns the model's summary {metric: (mean, ci, n)}."""
+    wall = time.perf_counter()
+    guidance, steps = _check(cfg, module)
     try:
         evaluators = Evaluators.load(cfg.evaluator_dir, num_joints=module.hparams.num_joints).for_module(module)
     except FileNotFoundError as err:
@@ -138,7 +147,7 @@ def run(cfg: DictConfig) -> Path:
     name = f"{module.hparams.dataset} {module.condition_kind} model"
     table = {"Real": rows["Real"], name: rows["Model"]}
     notes = [
-        f"checkpoint: {ckpt}",
+        f"checkpoint: {source}",
         f"{cfg.replications} replications ({cfg.mm_replications} for MultiModality), mean ± 95% CI; "
         f"{len(EvalClips.from_dataset(dm.dataset(cfg.split)))} {cfg.split} clips; R-precision pools of "
         f"min({cfg.pool_size}, clips)",
@@ -149,11 +158,11 @@ def run(cfg: DictConfig) -> Path:
     text = report.format_markdown(table, protocol, title="Evaluation", notes=notes)
     report.write_markdown(out / "table.md", text)
     report.write_csv(out / "table.csv", table, protocol)
-    extra = {"checkpoint": str(ckpt), "real": {k: list(v) for k, v in rows["Real"].items()}, "wall_s": wall,
+    extra = {"checkpoint": source, "real": {k: list(v) for k, v in rows["Real"].items()}, "wall_s": wall,
              "timings": timings, "sampler": to_dict(cfg.sampler), "steps": steps, "replications": reps}  # fmt: skip
     report.write_summary_json(out / "metrics.json", guidance, rows["Model"], extra)
     if cfg.wandb:
-        _log_wandb(out, cfg, table, {"checkpoint": str(ckpt), "guidance": guidance})
+        _log_wandb(out, cfg, table, {"checkpoint": source, "guidance": guidance})
     print("\n" + text)
     print(f"\nwritten to {out}")
-    return out
+    return rows["Model"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import logging
 from pathlib import Path
 
@@ -100,4 +101,27 @@ def run(cfg: DictConfig) -> Path:
     trainer.fit(module, datamodule=dm, ckpt_path=ckpt)
     last = out / "checkpoints" / "last.ckpt"
     print(f"\ntrained {trainer.global_step} steps; checkpoint: {last}")
+    if cfg.final_evaluation is not None:
+        final_evaluation(cfg, module, dm, out, trainer.global_step)
     return last
+
+
+def final_evaluation(cfg: DictConfig, module: MotionDiffusionModule, dm: MotionDataModule, out: Path, steps: int):
+    """evaluate.py's protocol on the trained weights (the EMA ones when ema=true), written into the run folder:
+    what a multirun's summary table reads (`motiondiff.eval.ablation`)."""
+    from motiondiff.cli.common import REPO_DIR
+    from motiondiff.cli.evaluate import report_evaluation
+
+    base = OmegaConf.load(REPO_DIR / "conf" / "evaluate.yaml")
+    for key in ("defaults", "hydra", "checkpoint"):
+        base.pop(key)
+    sampler = OmegaConf.load(REPO_DIR / "conf" / "sampler" / f"{cfg.final_evaluation.get('sampler', 'ddim')}.yaml")
+    overrides = {k: v for k, v in to_dict(cfg.final_evaluation).items() if k != "sampler"}
+    eval_cfg = OmegaConf.merge(base, {"paths": cfg.paths, "dataset": cfg.dataset, "sampler": sampler,
+                                      "wandb": False, "precision": cfg.trainer.precision}, overrides)  # fmt: skip
+    module.to(eval_cfg.device)
+    summary = report_evaluation(eval_cfg, module, dm, out, f"{out} (end of training, step {steps})")
+    meta = {"train_steps": steps, "overrides": list(HydraConfig.get().overrides.task),
+            "study": to_dict(cfg.study) if cfg.get("study") else None}  # fmt: skip
+    (out / "run.json").write_text(json.dumps(meta, indent=1))
+    return summary

@@ -80,6 +80,7 @@ class GenerationEvaluation(L.Callback):
                          guidance=guidance, **self.sampling)  # fmt: skip
         pl_module.train(was_training)
         gen = self.evaluators.embed_motion(feats)
+        feats = self.evaluators.as_hml(feats)  # smoothness in the evaluators' feature space, as every metric
         text = self.evaluators.embed_text(captions) if kind == "text" else None
         values = replication_metrics(kind, self.evaluators, real, gen, text=text, actions=clips.actions,
                                      generated_features=feats, seed=self.seed)  # fmt: skip

@@ -111,12 +111,16 @@ class Evaluators:
             models[kind], meta[kind] = load_released(path)
         return cls(models.get(TEXT_MOTION), models.get(ACTION), num_joints, meta)
 
+    def as_hml(self, features: list[np.ndarray]) -> list[np.ndarray]:
+        """The HumanML3D features the evaluators read (smoothness is measured on them too, so that models with
+        different representations are compared in one feature space)."""
+        return features if self.bridge is None else [self.bridge(f) for f in features]
+
     @torch.inference_mode()
     def embed_motion(self, features: list[np.ndarray]) -> dict[str, np.ndarray]:
         """De-normalised features of clips -> {"text_motion": (C, E), "action_features": (C, F), "action_logits"}."""
         out: dict[str, list] = {}
-        if self.bridge is not None:
-            features = [self.bridge(f) for f in features]
+        features = self.as_hml(features)
         for s in range(0, len(features), self.batch_size):
             x, lengths = pad(features[s : s + self.batch_size])
             if self.text_motion is not None:
