@@ -282,3 +282,12 @@ def test_official_split_files_parse(ref):
     for v in ids.values():  # every clip comes with its mirrored copy "M<id>" in the same split
         assert sum(i.startswith("M") for i in v) * 2 == len(v)
     assert "012314" in ids["train"]
+
+
+def test_official_layouts_refuse_representations_they_cannot_encode(tmp_path):
+    """The official layouts ship features only: a rotation representation is one clear error naming the fix."""
+    with pytest.raises(ValueError, match=r"representation=rp6jr.*stores hml263.*representation=hml263.*humanact12"):
+        HumanML3DDataModule(tmp_path, representation="rp6jr")
+    with pytest.raises(ValueError, match=r"stores kit251"):
+        KITDataModule(tmp_path, representation="hml263")
+    assert KITDataModule(tmp_path, representation="kit251").feature_dim == 251
