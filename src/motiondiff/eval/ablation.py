@@ -18,6 +18,7 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig
 
+from motiondiff.atomic import atomic_write
 from motiondiff.eval import report
 
 TITLES = {
@@ -74,12 +75,41 @@ def format_tables(cells: list[dict], notes: list[str] | None = None) -> str:
     return "\n".join(parts) + "\n"
 
 
+PANELS = (("fid", "FID ↓"), ("r_precision_top3", "R-precision top-3 ↑"))
+
+
+def plot(cells: list[dict], path: str | Path) -> Path:
+    """One row per study, FID and R-precision top-3 per cell as bars with 95% CIs, Real as a dashed line."""
+    from matplotlib.figure import Figure  # a bare Figure renders with Agg and touches no pyplot global state
+
+    studies = [t for t in TITLES if any(t in c["study"].get("tables", []) for c in cells)]
+    real = next((c["real"] for c in cells if c["study"].get("representation") == "hml263"), cells[0]["real"])
+    fig = Figure(figsize=(10, 3.2 * len(studies)), layout="constrained")
+    axes = fig.subplots(len(studies), len(PANELS), squeeze=False)
+    for row, table in zip(axes, studies, strict=True):
+        members = [c for c in cells if table in c["study"].get("tables", [])]
+        labels = [_label(c["study"], table) for c in members]
+        for ax, (key, name) in zip(row, PANELS, strict=True):
+            means = [c["summary"][key][0] for c in members]
+            cis = [c["summary"][key][1] for c in members]
+            ax.barh(labels, means, xerr=cis, capsize=3, color="tab:blue", alpha=0.8)
+            if key in real:
+                ax.axvline(real[key][0], linestyle="--", color="tab:gray", label="Real")
+                ax.legend(fontsize="small")
+            ax.invert_yaxis()
+            ax.set_title(f"{TITLES[table]}: {name}", fontsize="small")
+            ax.grid(alpha=0.3, axis="x")
+    return atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110), suffix=".png")
+
+
 def write_table(sweep_dir: str | Path, notes: list[str] | None = None) -> Path:
     sweep_dir = Path(sweep_dir)
-    text = format_tables(collect(sweep_dir), notes)
+    cells = collect(sweep_dir)
+    text = format_tables(cells, notes)
     path = report.write_markdown(sweep_dir / "ablation.md", text)
+    png = plot(cells, sweep_dir / "ablation.png")
     print(text)
-    print(f"ablation table: {path}")
+    print(f"ablation table: {path}; plot: {png}")
     return path
 
 
