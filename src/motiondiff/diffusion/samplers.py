@@ -3,7 +3,8 @@
 ``model_fn(x_t, t) -> raw network output`` (of the diffusion's prediction type), t a long tensor (B,) of ORIGINAL step
 indices even when fewer steps are taken. Masks, conditions and guidance live in model_fn (see ``guidance.py``).
 ``x0_hook(x0_hat, t) -> x0_hat`` runs on every step's x̂0 (t the original step index, decreasing): editing overwrites
-the known part there. No host sync inside the loops: per-step scalars come from float64 tables read once up front.
+the known part there (MDM). ``xt_hook(x_prev, t_prev) -> x_prev`` runs on every step's result, t_prev the original
+index of x_prev's noise level or -1 for the clean result: RePaint-style editing re-noises the known part there. No host sync inside the loops: per-step scalars come from float64 tables read once up front.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from motiondiff.diffusion.process import GaussianDiffusion
 
 ModelFn = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
 X0Hook = Callable[[torch.Tensor, int], torch.Tensor]
+XtHook = Callable[[torch.Tensor, int], torch.Tensor]
 
 
 def select_timesteps(num_steps: int, steps: int | None = None) -> list[int]:
@@ -74,6 +76,7 @@ def ddpm_sample(
     noise: torch.Tensor | None = None,
     generator: torch.Generator | None = None,
     x0_hook: X0Hook | None = None,
+    xt_hook: XtHook | None = None,
     clip_x0: float | None = None,
     progress: bool = False,
     steps: int | None = None,
@@ -99,6 +102,8 @@ def ddpm_sample(
         else:
             z = torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
             x = mean + (0.5 * log_var).exp() * z
+        if xt_hook is not None:
+            x = xt_hook(x, kept[i - 1] if i > 0 else -1)
     return x
 
 
@@ -125,6 +130,7 @@ def ddim_sample(
     noise: torch.Tensor | None = None,
     generator: torch.Generator | None = None,
     x0_hook: X0Hook | None = None,
+    xt_hook: XtHook | None = None,
     clip_x0: float | None = None,
     progress: bool = False,
     device: torch.device | str | None = None,
@@ -147,4 +153,6 @@ def ddim_sample(
         x = c_x0 * x0 + c_eps * eps
         if sigma > 0:
             x = x + sigma * torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
+        if xt_hook is not None:
+            x = xt_hook(x, kept[i - 1] if i > 0 else -1)
     return x

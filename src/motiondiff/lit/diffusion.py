@@ -173,6 +173,7 @@ class MotionDiffusionModule(L.LightningModule):
         generator: torch.Generator | None = None,
         progress: bool = False,
         x0_hook=None,
+        xt_hook=None,
     ) -> torch.Tensor:
         """Generate normalised features (B, max(lengths), D); frames past each length are padding."""
         self.eval()
@@ -189,12 +190,12 @@ class MotionDiffusionModule(L.LightningModule):
         if sampler == "ddim":
             return ddim_sample(
                 self.diffusion, fn, shape, steps=steps or 50, eta=eta, generator=generator,
-                x0_hook=x0_hook, progress=progress, device=self.device,
+                x0_hook=x0_hook, xt_hook=xt_hook, progress=progress, device=self.device,
             )  # fmt: skip
         if sampler == "ddpm":
             return ddpm_sample(
-                self.diffusion, fn, shape, steps=steps, generator=generator, x0_hook=x0_hook, progress=progress,
-                device=self.device,
+                self.diffusion, fn, shape, steps=steps, generator=generator, x0_hook=x0_hook, xt_hook=xt_hook,
+                progress=progress, device=self.device,
             )  # fmt: skip
         raise ValueError(f"unknown sampler {sampler!r}; choose ddpm or ddim")
 
