@@ -45,11 +45,11 @@ def test_modes_differ_and_overwrite_steers_the_middle(module):
     known = torch.randn(b, n, d, generator=torch.Generator().manual_seed(1))
     keep = torch.zeros(b, n, d, dtype=torch.bool)
     keep[..., : d // 2] = True  # a body-part style mask over feature dims
-    outs = {
-        m: inpaint(module, None, known, keep, torch.full((b,), n), mode=m, sampler="ddim", steps=5,
-                   generator=torch.Generator().manual_seed(0))  # fmt: skip
-        for m in ("overwrite", "repaint")
-    }
+    lengths = torch.full((b,), n)
+    outs = {}
+    for m in ("overwrite", "repaint"):
+        outs[m] = inpaint(module, None, known, keep, lengths, mode=m, sampler="ddim", steps=5,
+                          generator=torch.Generator().manual_seed(0))  # fmt: skip
     assert torch.equal(outs["overwrite"][keep], known[keep]) and torch.equal(outs["repaint"][keep], known[keep])
     assert not torch.allclose(outs["overwrite"][~keep], outs["repaint"][~keep])
 
