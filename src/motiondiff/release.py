@@ -1,0 +1,65 @@
+"""Released models: weights as safetensors beside a JSON of the hyper-parameters and provenance.
+
+A Lightning checkpoint is a pickle (optimizer state, callbacks, hyper-parameters); a released model needs none of
+that and must never run code when loaded. `save_release` keeps the module's persistent tensors (the EMA weights
+when training used EMA, since the checkpoint holds those) and `load_release` rebuilds the module from the JSON.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import torch
+from safetensors.torch import load_file, save_file
+
+from motiondiff.atomic import atomic_write
+
+FORMAT = "motiondiff-release-1"
+
+
+def release_paths(path: str | Path) -> tuple[Path, Path]:
+    """(weights, config) of a release named by either file or their common stem."""
+    stem = Path(path)
+    if stem.suffix in (".safetensors", ".json"):
+        stem = stem.with_suffix("")
+    return stem.with_suffix(".safetensors"), stem.with_suffix(".json")
+
+
+def save_release(module, path: str | Path, provenance: dict | None = None) -> tuple[Path, Path]:
+    """Write `<stem>.safetensors` and `<stem>.json` for a MotionDiffusionModule (atomically, weights first)."""
+    weights, config = release_paths(path)
+    state = {k: v.detach().cpu().contiguous() for k, v in module.state_dict().items()}
+    hparams = json.loads(json.dumps(dict(module.hparams), default=_plain))  # fails loudly on a non-JSON value
+    meta = {"format": FORMAT, "class": type(module).__name__, "hparams": hparams, "provenance": provenance or {}}
+    atomic_write(weights, lambda tmp: save_file(state, str(tmp)), suffix=".safetensors")
+    atomic_write(config, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)), suffix=".json")
+    return weights, config
+
+
+def load_release(path: str | Path, device: str = "cpu"):
+    """The module of a release, in eval mode (strict: every tensor must match the architecture in the JSON)."""
+    from motiondiff.lit.diffusion import MotionDiffusionModule
+
+    weights, config = release_paths(path)
+    for f in (weights, config):
+        if not f.is_file():
+            raise FileNotFoundError(f"release file {f} is missing: a release is {weights.name} + {config.name}")
+    meta = json.loads(config.read_text())
+    if meta.get("format") != FORMAT:
+        raise ValueError(f"{config} is not a motiondiff release (format {meta.get('format')!r}, expected {FORMAT})")
+    module = MotionDiffusionModule(**meta["hparams"])
+    module.load_state_dict(load_file(str(weights), device="cpu"), strict=True)
+    return module.to(device).eval()
+
+
+def provenance_of(release: str | Path) -> dict:
+    return json.loads(release_paths(release)[1].read_text()).get("provenance", {})
+
+
+def _plain(value):
+    if isinstance(value, torch.Tensor):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"hyper-parameter value {value!r} of type {type(value).__name__} cannot be stored as JSON")
