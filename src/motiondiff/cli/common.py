@@ -19,6 +19,10 @@ class UsageError(ValueError):
 def register_resolvers() -> None:
     if not OmegaConf.has_resolver("repo_dir"):
         OmegaConf.register_new_resolver("repo_dir", lambda: str(REPO_DIR))
+    if not OmegaConf.has_resolver("fast_cpu_precision"):
+        from motiondiff.hardware import fast_cpu_precision
+
+        OmegaConf.register_new_resolver("fast_cpu_precision", fast_cpu_precision)
 
 
 def quiet_tool_caches() -> None:
