@@ -1,0 +1,20 @@
+"""The CPU presets resolve to a precision this CPU runs fast."""
+
+from __future__ import annotations
+
+from hydra import compose, initialize_config_dir
+
+from motiondiff.cli.common import REPO_DIR, register_resolvers
+from motiondiff.hardware import cpu_has_fast_bf16, fast_cpu_precision
+
+
+def test_cpu_presets_follow_the_cpu():
+    register_resolvers()
+    expected = "bf16-mixed" if cpu_has_fast_bf16() else "32-true"
+    assert fast_cpu_precision() == expected
+    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
+        train = compose("train", overrides=["trainer=cpu"])
+        evaluate = compose("evaluate")
+    assert train.trainer.precision == expected and evaluate.precision == expected
+    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
+        assert compose("train", overrides=["trainer=cpu", "trainer.precision=32-true"]).trainer.precision == "32-true"
