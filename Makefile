@@ -32,8 +32,21 @@ train: setup
 	@echo "checkpoint: $$(ls -t outputs/train/*/checkpoints/last.ckpt | head -1)"
 	@echo "samples:    $$(ls -td outputs/sample/*/ | head -1)"
 
-test: setup
+test: setup browser
 	$(PY) -m pytest -q
+
+# The HTML viewer's end-to-end test screenshots it in headless Chromium: install Debian's when it is missing and
+# apt-get can run (as root); otherwise say so in one line and go on (that test then skips with the reason).
+.PHONY: browser
+browser:
+	@if command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
+		command -v google-chrome >/dev/null 2>&1; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		echo "installing Debian's chromium for the HTML viewer test"; \
+		( export DEBIAN_FRONTEND=noninteractive; apt-get install -y -qq chromium >/dev/null 2>&1 || \
+		  { apt-get update -qq && apt-get install -y -qq chromium >/dev/null; } ) || \
+			echo "note: could not install chromium; the HTML viewer screenshot test will skip"; \
+	else echo "note: no chromium and no root apt-get; the HTML viewer screenshot test will skip"; fi
 
 lint: setup
 	$(VENV)/bin/ruff check src tests

@@ -144,3 +144,60 @@ def sixd_to_matrix(d6: np.ndarray) -> np.ndarray:
 
 def quat_to_6d(q: np.ndarray) -> np.ndarray:
     return matrix_to_6d(quat_to_matrix(q))
+
+
+# ---- helpers for inverse kinematics --------------------------------------------------------------------------
+def axis_angle_to_quat(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rotation by `angle` radians (...) about unit `axis` (..., 3): q = (cos(angle/2), sin(angle/2) axis)."""
+    half = 0.5 * np.asarray(angle, dtype=np.float64)[..., None]
+    return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
+
+
+def any_perpendicular(u: np.ndarray) -> np.ndarray:
+    """A unit vector perpendicular to u (..., 3): u crossed with the basis axis least aligned with it."""
+    basis = np.eye(3)[np.argmin(np.abs(u), axis=-1)]
+    return qnormalize(np.cross(u, basis))
+
+
+def qswing(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Shortest-arc rotation taking direction u to direction v, like `qbetween`, but also defined for opposite
+    directions (where every half turn about an axis perpendicular to u is shortest; this picks
+    `any_perpendicular(u)`). Unnormalised q = (|u||v| + u.v, u x v) has norm 2|u||v|cos(theta/2), which only
+    vanishes for opposite vectors."""
+    axis = np.cross(u, v)
+    scale = np.sqrt((u**2).sum(-1) * (v**2).sum(-1))
+    q = np.concatenate([(scale + (u * v).sum(-1))[..., None], axis], axis=-1)
+    opposite = np.linalg.norm(q, axis=-1) <= 1e-12 * np.maximum(scale, _EPS)
+    half_turn = np.concatenate([np.zeros(u.shape[:-1] + (1,)), any_perpendicular(u)], axis=-1)
+    return qnormalize(np.where(opposite[..., None], half_turn, q))
+
+
+def qtwist_angle(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Angle (radians, in [-pi, pi)) of the twist of q about unit `axis` in the swing-twist split q = swing * twist,
+    twist = normalise(w, (xyz . axis) axis): 2 atan2(xyz . axis, w), the same for q and -q."""
+    angle = 2.0 * np.arctan2((q[..., 1:] * axis).sum(-1), q[..., 0])
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def qangle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angle (radians, [0, pi]) of the rotation taking quaternion a to b: with d = a^-1 b, 2 atan2(|d_xyz|, |d_w|)
+    (accurate for tiny angles and float32 inputs, where 2 acos(|<a, b>|) loses half the digits)."""
+    d = qmul(qinv(a), b)
+    return 2.0 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))
+
+
+def kabsch(source: np.ndarray, target: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Best-fit rotation matrices R (..., 3, 3) minimising sum_k w_k |R s_k - t_k|^2 for vectors (..., K, 3).
+
+    With H = sum_k w_k s_k t_k^T = U S V^T (SVD), R = V diag(1, 1, d) U^T, d = sign det(V U^T) so R is a rotation
+    and not a reflection (Kabsch 1976). Unique when the sources span a plane; exact when the targets are rotated
+    sources."""
+    w = np.ones(source.shape[:-1]) if weights is None else np.broadcast_to(weights, source.shape[:-1])
+    h = np.einsum("...k,...ki,...kj->...ij", w, source, target)
+    u, _, vt = np.linalg.svd(h)
+    v, ut = np.swapaxes(vt, -1, -2), np.swapaxes(u, -1, -2)
+    d = np.sign(np.linalg.det(v @ ut))
+    d = np.where(d == 0, 1.0, d)
+    fix = np.broadcast_to(np.eye(3), h.shape).copy()
+    fix[..., 2, 2] = d
+    return v @ fix @ ut

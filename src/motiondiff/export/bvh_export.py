@@ -1,0 +1,174 @@
+"""Export motions as BVH files on a project skeleton (SMPL-22, KIT-21 or a dataset's rig), for Blender, MotionBuilder
+and other animation tools.
+
+Units: the file holds the input's units (metres in this project) times `scale` (e.g. scale=100 for a centimetre
+file); `read_bvh` gives file units back, so `read_bvh(path).scaled(1 / scale)` returns metres. Joints keep the
+skeleton's names (whitespace turned into '_', which BVH cannot hold); the file lists them depth-first, so look
+them up by name after reading. Channels: root 'Xposition Yposition Zposition Zrotation Xrotation Yrotation',
+other joints 'Zrotation Xrotation Yrotation'; leaves get a zero End Site.
+
+Every export reports its fit error: the distance between the written motion's forward kinematics and the joints
+it was made from (metres, before `scale`).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from motiondiff.data.bvh import motion_from_arrays, write_bvh
+from motiondiff.inverse_kinematics import fit_rest_offsets, solve_rotations
+from motiondiff.rotations import matrix_to_quat, qfix, qnormalize
+from motiondiff.skeleton import Skeleton
+
+if TYPE_CHECKING:
+    from motiondiff.data.representations import Representation
+
+__all__ = ["ExportReport", "export_bvh", "export_bvh_from_features"]
+
+TWIST_HALF_LIFE_S = 1.0  # seconds for a twist carried through a swing singularity to fade by half (see IK)
+
+
+@dataclass(frozen=True)
+class ExportReport:
+    """Where a BVH went and how closely it reproduces the joints (metres): max and mean over frames and joints of
+    |FK(file motion) - joints|. Usable as a path (os.fspath)."""
+
+    path: Path
+    max_error: float
+    mean_error: float
+    frames: int
+    method: str  # "rotations" (written as given) or "ik" (solved from positions)
+
+    def __fspath__(self) -> str:
+        return str(self.path)
+
+
+def export_bvh(
+    path: str | os.PathLike,
+    joints: np.ndarray,
+    skeleton: Skeleton,
+    fps: float,
+    *,
+    rotations: np.ndarray | None = None,
+    root: np.ndarray | None = None,
+    offsets: np.ndarray | None = None,
+    scale: float = 1.0,
+) -> ExportReport:
+    """Write joints (N, J, 3) (metres, y up, the skeleton's joint order) as a BVH on `skeleton`.
+
+    With `rotations` (N, J, 4) local quaternions (w, x, y, z; the root's global) and `root` (N, 3) positions, as a
+    rotation representation gives them, those are written as they are, on `offsets` (default: the skeleton's).
+    Otherwise the rotations are solved by inverse kinematics on `offsets`, by default the motion's own bone lengths
+    and sibling arrangement (`fit_rest_offsets`), which makes the fit exact up to float precision for any motion of
+    rigid bones. The file is written atomically (nothing is left behind on failure)."""
+    joints = _check_joints(joints, skeleton)
+    if not (np.isfinite(fps) and fps > 0):
+        raise ValueError(f"export_bvh: fps must be a positive number, got {fps}")
+    if not (np.isfinite(scale) and scale > 0):
+        raise ValueError(f"export_bvh: scale must be a positive number (100 for a centimetre file), got {scale}")
+    if (rotations is None) != (root is None):
+        raise ValueError(
+            "export_bvh: pass both rotations and root (a rotation representation's output) or neither (rotations "
+            "are then solved from the joints)"
+        )
+    if rotations is not None:
+        rotations, root = _check_rotations(rotations, root, joints.shape[:2])
+        offsets = _check_offsets(skeleton.offsets if offsets is None else offsets, skeleton)
+        method = "rotations"
+    else:
+        offsets = fit_rest_offsets(joints, skeleton) if offsets is None else _check_offsets(offsets, skeleton)
+        rotations, root = solve_rotations(joints, skeleton, offsets, twist_half_life=TWIST_HALF_LIFE_S * fps)
+        method = "ik"
+    names = [re.sub(r"\s+", "_", n) for n in skeleton.joint_names]
+    motion = motion_from_arrays(
+        names, skeleton.parents, offsets * scale, rotations, root * scale, fps, source=str(path)
+    )
+    distance = np.linalg.norm(motion.positions() / scale - joints, axis=-1)
+    write_bvh(path, motion)
+    return ExportReport(Path(path), float(distance.max()), float(distance.mean()), len(joints), method)
+
+
+def export_bvh_from_features(
+    path: str | os.PathLike,
+    representation: Representation,
+    features: np.ndarray,
+    fps: float,
+    *,
+    offsets: np.ndarray | None = None,
+    scale: float = 1.0,
+) -> ExportReport:
+    """Write de-normalised features (N, D) of `representation` as a BVH on its skeleton: a rotation representation's
+    own rotations and root (no IK; `offsets` default to the rig's mean offsets), else the decoded joints through IK.
+    The fit error is measured against the representation's own decoding."""
+    from motiondiff.data.representations import RotationRepresentation  # torch: only when features are exported
+
+    features = np.asarray(features, dtype=np.float64)
+    if features.ndim != 2 or features.shape[1] != representation.dim or len(features) == 0:
+        raise ValueError(
+            f"export_bvh_from_features: {representation.name} features must have shape (frames, "
+            f"{representation.dim}) for one motion, got {features.shape}; de-normalise and pass one sample at a time"
+        )
+    if not np.isfinite(features).all():
+        raise ValueError("export_bvh_from_features: features contain NaN or Inf; the sample diverged, resample it")
+    skeleton = representation.skeleton
+    joints = representation.decode_numpy(features, offsets)
+    if isinstance(representation, RotationRepresentation):
+        import torch
+
+        with torch.no_grad():
+            matrices = representation.rotation_matrices(torch.as_tensor(features)).numpy()
+        # scipy's from_matrix takes the nearest rotation, so raw 9-number matrices (rpmjr) also give rotations
+        rotations = matrix_to_quat(matrices)
+        rig_offsets = skeleton.offsets if offsets is None else offsets
+        return export_bvh(
+            path, joints, skeleton, fps, rotations=rotations, root=features[:, :3], offsets=rig_offsets, scale=scale
+        )
+    return export_bvh(path, joints, skeleton, fps, offsets=offsets, scale=scale)
+
+
+def _check_joints(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
+    joints = np.asarray(joints, dtype=np.float64)
+    j = skeleton.num_joints
+    if joints.ndim != 3 or joints.shape[1:] != (j, 3) or len(joints) == 0:
+        raise ValueError(
+            f"export_bvh: joints must have shape (frames >= 1, {j}, 3) for skeleton {skeleton.name!r}, got "
+            f"{joints.shape}; decode features first (Representation.decode_numpy) and pass one motion at a time"
+        )
+    bad = ~np.isfinite(joints).all(axis=(1, 2))
+    if bad.any():
+        raise ValueError(
+            f"export_bvh: joints contain NaN or Inf in {int(bad.sum())} frame(s) (first: {int(np.argmax(bad))}); "
+            "the motion diverged, resample it or drop those frames"
+        )
+    return joints
+
+
+def _check_rotations(rotations, root, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    rotations, root = np.asarray(rotations, dtype=np.float64), np.asarray(root, dtype=np.float64)
+    n, j = shape
+    if rotations.shape != (n, j, 4) or root.shape != (n, 3):
+        raise ValueError(
+            f"export_bvh: rotations must be ({n}, {j}, 4) local quaternions (w, x, y, z) and root ({n}, 3) to match "
+            f"the joints, got {rotations.shape} and {root.shape}"
+        )
+    if not (np.isfinite(rotations).all() and np.isfinite(root).all()):
+        raise ValueError("export_bvh: rotations or root contain NaN or Inf; the motion diverged, resample it")
+    if (np.linalg.norm(rotations, axis=-1) < 1e-6).any():
+        raise ValueError("export_bvh: some rotation quaternions are zero; pass unit quaternions (w, x, y, z)")
+    return qfix(qnormalize(rotations)), root
+
+
+def _check_offsets(offsets, skeleton: Skeleton) -> np.ndarray:
+    offsets = np.asarray(offsets, dtype=np.float64)
+    if offsets.shape != (skeleton.num_joints, 3) or not np.isfinite(offsets).all():
+        raise ValueError(
+            f"export_bvh: offsets must be finite with shape ({skeleton.num_joints}, 3) (rest offset of each joint "
+            f"from its parent, metres), got {offsets.shape}"
+        )
+    return offsets

@@ -1,0 +1,170 @@
+"""Inverse kinematics: local joint rotations that reproduce given joint positions on a skeleton with rest offsets.
+
+Notation: p_j (N, 3) joint positions, o_c the rest OFFSET of child c from its parent j, W_j the world rotation of
+joint j (W_root = L_root) and L_j = W_parent^-1 W_j its local rotation, so that forward kinematics is
+p_c = p_j + W_j o_c. For every joint j (parents first), the observed child bones in j's parent frame are
+d_c = W_parent^-1 (p_c - p_j), and L_j is chosen so that L_j o_c points along d_c:
+
+- several children whose rest offsets span a plane (pelvis, chest): the weighted Kabsch rotation
+  L_j = argmin_R sum_c |o_c| |R o^_c - d^_c|^2 (SVD), exact when the motion keeps the rest arrangement of the
+  sibling bones (see `fit_rest_offsets` for rest offsets that do);
+- one child (or collinear children): the shortest arc from o^ to d^ ("swing", no twist about the bone) times a
+  twist about the bone that keeps L_j continuous in time (`_continuous_twist`);
+- no child (a leaf): identity, as nothing observed constrains it.
+
+With rest offsets of the motion's bone lengths and sibling arrangement, FK(L, offsets, root) gives back every
+joint to float precision. Vectorised over frames; the loop runs over joints only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import lfilter
+
+from motiondiff.rotations import (
+    axis_angle_to_quat,
+    kabsch,
+    matrix_to_quat,
+    qfix,
+    qinv,
+    qmul,
+    qnormalize,
+    qrot,
+    qswing,
+    qtwist_angle,
+)
+from motiondiff.skeleton import Skeleton
+
+__all__ = ["DEFAULT_TWIST_HALF_LIFE", "fit_rest_offsets", "solve_rotations"]
+
+# Frames (1 s at 20 fps) for a twist carried through a swing singularity to fade by half. Longer: smaller steps
+# (about 180 deg x (1 - 2^(-1/half_life)) per frame at worst); shorter: back to the untwisted solution sooner.
+DEFAULT_TWIST_HALF_LIFE = 20.0
+_PLANAR = 1e-6  # |sin| between two rest directions above which a joint's children fix a full rotation
+_TINY = 1e-12
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), _TINY)
+
+
+def _spans_plane(directions: np.ndarray) -> bool:
+    """Whether unit vectors (K, 3) are not all collinear, i.e. whether they fix a rotation completely."""
+    return (
+        len(directions) >= 2
+        and float(np.linalg.norm(np.cross(directions[:, None], directions[None]), axis=-1).max()) > _PLANAR
+    )
+
+
+def _check_positions(positions: np.ndarray, skeleton: Skeleton, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    positions = np.asarray(positions, dtype=np.float64)
+    j = skeleton.num_joints
+    if positions.ndim != 3 or positions.shape[1:] != (j, 3) or len(positions) == 0:
+        raise ValueError(
+            f"IK needs joint positions of shape (frames >= 1, {j}, 3) for skeleton {skeleton.name!r}, got "
+            f"{positions.shape}; pass one clip at a time, joints in the skeleton's order"
+        )
+    if not np.isfinite(positions).all():
+        raise ValueError("IK: joint positions contain NaN or Inf; fix or drop those frames first")
+    offsets = np.asarray(offsets, dtype=np.float64)
+    if offsets.shape != (j, 3) or not np.isfinite(offsets).all():
+        raise ValueError(f"IK: offsets must be finite with shape ({j}, 3), got {offsets.shape}")
+    return positions, offsets
+
+
+def solve_rotations(
+    positions: np.ndarray,
+    skeleton: Skeleton,
+    offsets: np.ndarray | None = None,
+    *,
+    twist_half_life: float = DEFAULT_TWIST_HALF_LIFE,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Joint positions (N, J, 3) -> local rotations (N, J, 4) (w, x, y, z; the root's is global, sign-continuous
+    over time) and root positions (N, 3), on `skeleton` with rest `offsets` (default: the skeleton's).
+
+    `twist_half_life` (frames, > 0): a twist carried through a swing singularity returns to the untwisted solution
+    with this half-life (see `_continuous_twist`)."""
+    offsets = skeleton.offsets if offsets is None else offsets
+    positions, offsets = _check_positions(positions, skeleton, offsets)
+    if not twist_half_life > 0:
+        raise ValueError(f"twist_half_life must be a positive number of frames, got {twist_half_life}")
+    frames, joints = positions.shape[:2]
+    identity = np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), (frames, 4))
+    local = np.empty((frames, joints, 4))
+    world = np.empty((frames, joints, 4))
+    for j, p in enumerate(skeleton.parents):
+        parent_world = identity if p < 0 else world[:, p]
+        kids = [c for c in skeleton.children[j] if np.linalg.norm(offsets[c]) > _TINY]
+        if not kids:
+            rot = identity.copy()
+        else:
+            observed = qrot(qinv(parent_world)[:, None], positions[:, kids] - positions[:, [j]])  # (N, K, 3)
+            rot = _fit_joint(offsets[kids], observed, twist_half_life)
+        local[:, j] = qfix(rot)
+        world[:, j] = qmul(parent_world, local[:, j])
+    return local, positions[:, 0].copy()
+
+
+def _fit_joint(rest: np.ndarray, observed: np.ndarray, twist_half_life: float) -> np.ndarray:
+    """Local rotation (N, 4) taking the rest child offsets (K, 3) onto the observed child bones (N, K, 3)."""
+    lengths = np.linalg.norm(rest, axis=-1)
+    rest_dir, seen_dir = _unit(rest), _unit(observed)
+    if _spans_plane(rest_dir):
+        return qnormalize(matrix_to_quat(kabsch(rest_dir, seen_dir, lengths)))
+    # Collinear children (usually one): the heaviest child's direction; opposite ones count with their sign.
+    axis = rest_dir[np.argmax(lengths)]
+    target = (seen_dir * (lengths * (rest_dir @ axis))[:, None]).sum(axis=1)
+    still = np.linalg.norm(target, axis=-1) < _TINY  # a zero-length observed bone: no evidence, keep the rest pose
+    target = np.where(still[:, None], axis, target)
+    swing = qswing(np.broadcast_to(axis, target.shape), target)
+    return qmul(swing, _continuous_twist(swing, axis, twist_half_life))
+
+
+def _continuous_twist(swing: np.ndarray, axis: np.ndarray, half_life: float) -> np.ndarray:
+    """Twist quaternions T(alpha_t) about `axis` that make swing_t T(alpha_t) continuous in t.
+
+    The swing S_t (shortest arc from the rest direction u) is smooth except where the bone nears -u: there its arc
+    axis spins and S_t turns fast about the bone (a flip at -u itself). Split S_{t-1}^-1 S_t = G_t T(beta_t)
+    (swing G_t, twist beta_t about u) and set alpha_t = lam alpha_{t-1} - beta_t, lam = 2^(-1/half_life). Then
+    L_{t-1}^-1 L_t = T(-alpha_{t-1}) G_t T(lam alpha_{t-1}), whose angle is at most the bone's own turn between the
+    frames plus (1 - lam)|alpha_{t-1}|: the twist is carried through the singularity and then fades back to the
+    untwisted solution, so long motions do not drift. A linear recurrence, so lfilter runs it vectorised."""
+    beta = np.zeros(len(swing))
+    if len(swing) > 1:
+        beta[1:] = qtwist_angle(qmul(qinv(swing[:-1]), swing[1:]), axis)
+    lam = 0.5 ** (1.0 / half_life)
+    alpha = lfilter([1.0], [1.0, -lam], -beta)
+    return axis_angle_to_quat(np.broadcast_to(axis, swing[..., 1:].shape), alpha)
+
+
+def fit_rest_offsets(positions: np.ndarray, skeleton: Skeleton) -> np.ndarray:
+    """Rest offsets (J, 3) under which `solve_rotations` reproduces the motion: each bone gets its median length over
+    the frames along the skeleton's rest direction (+y where the skeleton's offset is zero); the children of a
+    branching joint (pelvis, chest) get instead their arrangement in the motion - the Procrustes mean of the sibling
+    bones over the frames - turned by the best-fit rotation onto the skeleton's rest arrangement, so the rest pose
+    still looks like the skeleton's while the arrangement matches the data (a single rotation per joint can only
+    place several children exactly when their arrangement is the rest one)."""
+    positions, _ = _check_positions(positions, skeleton, skeleton.offsets)
+    parents = np.array(skeleton.parents)
+    offsets = np.zeros((skeleton.num_joints, 3))
+    bones = positions[:, 1:] - positions[:, parents[1:]]
+    lengths = np.median(np.linalg.norm(bones, axis=-1), axis=0)
+    rest_dir = _unit(np.asarray(skeleton.offsets, dtype=np.float64)[1:])
+    rest_dir[np.linalg.norm(rest_dir, axis=-1) < 0.5] = [0.0, 1.0, 0.0]
+    offsets[1:] = rest_dir * lengths[:, None]
+    for j, kids in enumerate(skeleton.children):
+        kids = [c for c in kids if np.linalg.norm(offsets[c]) > _TINY]
+        if _spans_plane(_unit(offsets[kids])):
+            offsets[kids] = _sibling_arrangement(positions[:, kids] - positions[:, [j]], offsets[kids])
+    return offsets
+
+
+def _sibling_arrangement(bones: np.ndarray, template: np.ndarray, iterations: int = 3) -> np.ndarray:
+    """Generalised Procrustes: the shape M (K, 3) minimising sum_t |R_t M - X_t|^2 over rotations R_t, for sibling
+    bones X_t (N, K, 3), oriented like `template`. For a rigid arrangement (X_t = Q_t S) one step is exact:
+    R_t = Q_t A for a fixed A, so the mean of R_t^T X_t is A^T S, S turned rigidly."""
+    shape = template
+    for _ in range(iterations):
+        pose = kabsch(np.broadcast_to(shape, bones.shape), bones)  # (N, 3, 3)
+        shape = np.einsum("nji,nkj->ki", pose, bones) / len(bones)  # mean of R_t^T x_tk
+    return shape @ kabsch(shape, template).T

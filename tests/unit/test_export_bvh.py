@@ -1,0 +1,171 @@
+"""BVH export (motiondiff.export.bvh_export) and export_motion: export -> read_bvh -> FK gives back the exported
+joints (acceptance: <= 1e-3 m) on synthetic motions and on every real clip of the embedded val split, through IK
+(positions) and as written rotations (rotation representations), plus units, fit reports and bad input."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from motiondiff.data.bvh import BVHMotion, read_bvh
+from motiondiff.data.datamodules import embedded_data_root
+from motiondiff.data.prepared import load_split
+from motiondiff.data.representations import ROTATION_REPRESENTATIONS, get_representation
+from motiondiff.export import FORMATS, ExportReport, export_bvh, export_bvh_from_features, export_motion
+from motiondiff.kinematics import forward_kinematics
+from motiondiff.rotations import qangle
+from motiondiff.skeleton import SMPL22, Skeleton
+
+TOL = 1e-3  # metres: the acceptance criterion of the BVH round trip
+
+
+@pytest.fixture(scope="module")
+def val():
+    split = load_split(embedded_data_root(), "val")
+    return split.rig(), split.clips()
+
+
+def read_positions(path, skeleton: Skeleton, scale: float = 1.0) -> np.ndarray:
+    """World positions (N, J, 3) of a written BVH, metres, in the skeleton's joint order (files are depth-first)."""
+    motion = read_bvh(path)
+    assert sorted(motion.joint_names) == sorted(skeleton.joint_names)
+    return motion.scaled(1.0 / scale).positions()[:, joint_order(motion, skeleton)]
+
+
+def joint_order(motion: BVHMotion, skeleton: Skeleton) -> list[int]:
+    return [motion.joint_names.index(n) for n in skeleton.joint_names]
+
+
+def random_motion(frames=30, seed=0):
+    rotations = Rotation.random(frames * 22, random_state=seed).as_quat()[:, [3, 0, 1, 2]].reshape(frames, 22, 4)
+    translations = np.repeat(SMPL22.offsets[None], frames, axis=0)
+    translations[:, 0] = np.random.default_rng(seed).normal(size=(frames, 3)) + [0, 1, 0]
+    return rotations, translations[:, 0], forward_kinematics(rotations, translations, SMPL22.parents)[0]
+
+
+# ---- synthetic ----------------------------------------------------------------------------------------------------
+def test_synthetic_positions_round_trip_through_the_file(tmp_path):
+    _, _, joints = random_motion()
+    report = export_bvh(tmp_path / "random.bvh", joints, SMPL22, fps=20)
+    assert isinstance(report, ExportReport) and report.method == "ik" and report.frames == 30
+    assert os.fspath(report) == str(tmp_path / "random.bvh")
+    err = np.linalg.norm(read_positions(report.path, SMPL22) - joints, axis=-1).max()
+    assert err <= 1e-5 and report.max_error <= 1e-9
+    motion = read_bvh(report.path)
+    assert motion.fps == 20.0 and motion.num_frames == 30
+    names = motion.joint_names
+    parents = {n: (names[p] if p >= 0 else None) for n, p in zip(names, motion.parents.tolist(), strict=True)}
+    assert parents == {n: (SMPL22.joint_names[p] if p >= 0 else None) for n, p in zip(SMPL22.joint_names, SMPL22.parents, strict=True)}  # fmt: skip
+
+
+def test_rotations_are_written_as_given(tmp_path):
+    rotations, root, joints = random_motion(seed=1)
+    report = export_bvh(tmp_path / "rot.bvh", joints, SMPL22, 30, rotations=rotations, root=root)
+    assert report.method == "rotations" and report.max_error <= 1e-9
+    motion = read_bvh(report.path)
+    # every joint's rotation comes back, also the twists IK could not have known
+    assert qangle(motion.rotations[:, joint_order(motion, SMPL22)], rotations).max() < 1e-6
+    assert np.linalg.norm(read_positions(report.path, SMPL22) - joints, axis=-1).max() <= 1e-5
+
+
+def test_scale_writes_other_units(tmp_path):
+    _, _, joints = random_motion(seed=2)
+    report = export_bvh(tmp_path / "cm.bvh", joints, SMPL22, 20, scale=100.0)
+    motion = read_bvh(report.path)
+    hip = motion.joint_names.index("l_hip")
+    assert 5 < np.linalg.norm(motion.offsets[hip]) < 20  # centimetres (the bone is ~10 cm)
+    assert np.linalg.norm(read_positions(report.path, SMPL22, scale=100.0) - joints, axis=-1).max() <= 1e-5
+
+
+# ---- real data ----------------------------------------------------------------------------------------------------
+def test_real_clips_round_trip_from_positions(val, tmp_path):
+    """The acceptance criterion: export from positions -> read_bvh -> FK equals the exported joints to <= 1e-3 m."""
+    _, clips = val
+    worst = worst_reported = 0.0
+    for i, clip in enumerate(clips):
+        report = export_bvh(tmp_path / f"clip{i}.bvh", clip.joints, SMPL22, fps=20)
+        err = float(np.linalg.norm(read_positions(report.path, SMPL22) - clip.joints, axis=-1).max())
+        assert abs(err - report.max_error) < 1e-5  # the report tells the truth about the file
+        worst, worst_reported = max(worst, err), max(worst_reported, report.max_error)
+    print(
+        f"\nBVH round trip, {len(clips)} real SMPL-22 clips from positions: max {worst:.2e} m (reported {worst_reported:.2e})"
+    )
+    assert worst <= TOL
+
+
+def test_nominal_offsets_show_up_in_the_fit_error(val, tmp_path):
+    """The report is not a formality: forcing the skeleton's nominal offsets (other bone lengths and pelvis/chest
+    arrangement than the data) makes the fit visibly worse, and the report says so."""
+    _, clips = val
+    report = export_bvh(tmp_path / "nominal.bvh", clips[0].joints, SMPL22, 20, offsets=SMPL22.offsets)
+    err = np.linalg.norm(read_positions(report.path, SMPL22) - clips[0].joints, axis=-1).max()
+    assert report.max_error > 0.01 and abs(err - report.max_error) < 1e-5
+
+
+@pytest.mark.parametrize("name", [*ROTATION_REPRESENTATIONS, "jp", "hml263"])
+def test_real_clip_features_round_trip(val, tmp_path, name):
+    """Rotation representations write their own rotations (no IK); jp (rig positions) and hml263 (SMPL-22) go
+    through IK. The file gives back the representation's decoding, and for rotations the clip's own rotations."""
+    rig, clips = val
+    clip = clips[17]
+    rep = get_representation(name, SMPL22, rig)
+    feats = rep.encode(clip)
+    offsets = None if name == "hml263" else clip.offsets
+    report = export_bvh_from_features(tmp_path / f"{name}.bvh", rep, feats, fps=20, offsets=offsets)
+    expected = clip.joints[: len(feats)] if name == "hml263" else clip.rig_positions()
+    err = np.linalg.norm(read_positions(report.path, rep.skeleton) - expected, axis=-1).max()
+    print(f"\n{name}: method {report.method}, BVH round trip max {err:.2e} m")
+    assert err <= TOL
+    assert report.method == ("rotations" if name in ROTATION_REPRESENTATIONS else "ik")
+    if name in ROTATION_REPRESENTATIONS:
+        motion = read_bvh(report.path)
+        assert qangle(motion.rotations[:, joint_order(motion, rig)], clip.rotations).max() < 1e-5
+
+
+# ---- export_motion --------------------------------------------------------------------------------------------------
+def test_export_motion_writes_every_format(val, tmp_path):
+    _, clips = val
+    joints = clips[0].joints[:4]
+    paths = export_motion(tmp_path / "walk.v1", joints, SMPL22, 20, ["npy", "bvh", "html", "gif", "npy"], title="t")
+    assert list(paths) == ["npy", "bvh", "html", "gif"]
+    assert {p.name for p in tmp_path.iterdir()} == {"walk.v1.npy", "walk.v1.bvh", "walk.v1.html", "walk.v1.gif"}
+    np.testing.assert_array_equal(np.load(paths["npy"]), joints)
+    assert np.linalg.norm(read_positions(paths["bvh"], SMPL22) - joints, axis=-1).max() <= TOL
+    assert paths["gif"].read_bytes()[:3] == b"GIF"
+
+
+def test_export_motion_refuses_unknown_formats_before_writing(tmp_path):
+    _, _, joints = random_motion(frames=3)
+    with pytest.raises(ValueError, match="unknown export format.*'fbx'.*npy, mp4, gif, bvh, html"):
+        export_motion(tmp_path / "x", joints, SMPL22, 20, ["npy", "fbx"])
+    assert list(tmp_path.iterdir()) == [] and FORMATS == ("npy", "mp4", "gif", "bvh", "html")
+
+
+# ---- bad input ----------------------------------------------------------------------------------------------------
+def test_bad_input_is_refused_and_leaves_nothing(tmp_path, val):
+    rotations, root, joints = random_motion(frames=5)
+    target = tmp_path / "bad.bvh"
+    with pytest.raises(ValueError, match=r"\(frames >= 1, 22, 3\).*decode features first"):
+        export_bvh(target, joints[:, :21], SMPL22, 20)
+    nan = joints.copy()
+    nan[3, 2, 1] = np.inf
+    with pytest.raises(ValueError, match=r"NaN or Inf in 1 frame\(s\) \(first: 3\)"):
+        export_bvh(target, nan, SMPL22, 20)
+    with pytest.raises(ValueError, match="both rotations and root"):
+        export_bvh(target, joints, SMPL22, 20, rotations=rotations)
+    with pytest.raises(ValueError, match=r"rotations must be \(5, 22, 4\)"):
+        export_bvh(target, joints, SMPL22, 20, rotations=rotations[:, :, :3], root=root)
+    with pytest.raises(ValueError, match="fps must be a positive"):
+        export_bvh(target, joints, SMPL22, 0)
+    with pytest.raises(ValueError, match="offsets must be finite with shape"):
+        export_bvh(target, joints, SMPL22, 20, offsets=np.zeros((3, 3)))
+    rig, _ = val
+    rep = get_representation("rp6jr", SMPL22, rig)
+    with pytest.raises(ValueError, match=f"features must have shape \\(frames, {rep.dim}\\)"):
+        export_bvh_from_features(target, rep, np.zeros((5, rep.dim + 1)), 20)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        export_bvh(tmp_path / "missing" / "deeper" / "x.bvh", joints, SMPL22, 20)
+    assert list(tmp_path.iterdir()) == []
