@@ -16,5 +16,9 @@ def test_cpu_presets_follow_the_cpu():
         train = compose("train", overrides=["trainer=cpu"])
         evaluate = compose("evaluate")
     assert train.trainer.precision == expected and evaluate.precision == expected
+    # what train.py hands to Lightning: resolved, not the interpolation string
+    from omegaconf import OmegaConf
+
+    assert OmegaConf.to_container(train.trainer, resolve=True)["precision"] == expected
     with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
         assert compose("train", overrides=["trainer=cpu", "trainer.precision=32-true"]).trainer.precision == "32-true"

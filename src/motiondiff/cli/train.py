@@ -91,7 +91,7 @@ def run(cfg: DictConfig) -> Path:
 
         callbacks.append(EMAWeightAveraging(decay=cfg.ema_decay))
     trainer = L.Trainer(
-        **OmegaConf.to_container(cfg.trainer), logger=loggers, callbacks=callbacks, default_root_dir=out
+        **OmegaConf.to_container(cfg.trainer, resolve=True), logger=loggers, callbacks=callbacks, default_root_dir=out
     )
     n_params = sum(p.numel() for p in module.denoiser.parameters() if p.requires_grad)
     log.info("denoiser: %.2f M trainable parameters; outputs in %s", n_params / 1e6, out)

@@ -39,7 +39,7 @@ def _git_commit() -> str:
 
 
 def _fit(cfg: DictConfig, module: L.LightningModule, dm: MotionDataModule, epochs: int) -> float:
-    trainer = L.Trainer(**OmegaConf.to_container(cfg.trainer), max_epochs=epochs, logger=False,
+    trainer = L.Trainer(**OmegaConf.to_container(cfg.trainer, resolve=True), max_epochs=epochs, logger=False,
                         default_root_dir=str(Path.cwd()))  # fmt: skip
     start = time.perf_counter()
     trainer.fit(module, datamodule=dm)
