@@ -1,9 +1,14 @@
 """`python sample.py ...`: generate motion from text, an action name or nothing, and write joints, features and
-stick-figure videos, plus results.json with what each sample measurably does."""
+stick-figure videos, plus results.json with what each sample measurably does.
+
+Timed prompts, `prompts="[a person walks forward:4, a person waves:3]"` (or `action="[walk:4, wave:3]"`), make ONE
+long motion that follows them in order (`edit.long_motion`); `smooth_sigma=` applies vvMDM's temporal filter."""
 
 from __future__ import annotations
 
+import copy
 import json
+import math
 import re
 from dataclasses import asdict
 from pathlib import Path
@@ -16,10 +21,15 @@ from omegaconf import DictConfig, ListConfig
 from motiondiff.cli.common import UsageError, find_checkpoint, text_encoder_kwargs, to_dict
 from motiondiff.data.captions import measure
 from motiondiff.data.representation_spec import bridge_from_spec
+from motiondiff.edit.inpaint import EDIT_MODES
+from motiondiff.edit.long_motion import boundary_report, generate_long
+from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.eval.behaviour import mean_joint_speed
 from motiondiff.lit.diffusion import MotionDiffusionModule
 
 MAX_TEXT_CHARS = 1000  # far beyond any caption the encoders were trained on (CLIP keeps 77 tokens)
+# "<text>:<seconds>", seconds a positive decimal, optionally "4s"; a colon not followed by a number is text
+TIMED = re.compile(r"^(?P<text>.*?)\s*:\s*(?P<seconds>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*s?\s*$")
 
 
 def load_module(path: Path, device: str = "cpu") -> MotionDiffusionModule:
@@ -76,6 +86,51 @@ def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str 
     return [check_text(t) for t in texts]
 
 
+def parse_timed_prompts(items: list[str]) -> list[tuple[str, float]] | None:
+    """["a person walks:4", "a person waves:2.5"] -> [("a person walks", 4.0), ("a person waves", 2.5)]; None when
+    no item ends in :<seconds> (separate samples, as before). Every item or none must be timed."""
+    matches = [TIMED.match(str(item)) for item in items]
+    if not any(matches):
+        return None
+    untimed = [str(item) for item, m in zip(items, matches, strict=True) if m is None]
+    if untimed:
+        raise UsageError(
+            f"either every prompt ends in :<seconds> (one long motion through them) or none does (separate "
+            f"samples); these have no time: {', '.join(repr(u) for u in untimed)}"
+        )
+    timed = []
+    for m in matches:
+        text, seconds = m["text"].strip(), float(m["seconds"])
+        if not text:
+            raise UsageError(f"{m.string!r} has a time but no prompt before the colon")
+        if not (seconds > 0 and math.isfinite(seconds)):
+            raise UsageError(f"{m.string!r}: the seconds after the colon must be positive")
+        timed.append((text, seconds))
+    return timed
+
+
+def split_timed(cfg: DictConfig) -> tuple[DictConfig, list[float] | None]:
+    """The config with timed prompts=/prompts_file=/action= items reduced to their texts, and their seconds (None:
+    untimed, the config as given). text= is one prompt and never timed."""
+    key = next((k for k in ("prompts", "prompts_file", "action") if cfg[k] is not None), None)
+    if key is None or sum(cfg[k] is not None for k in ("text", "prompts", "prompts_file", "action")) > 1:
+        return cfg, None  # nothing to parse, or a conflict that collect_prompts reports
+    if key == "prompts_file":
+        path = Path(cfg.prompts_file)
+        if not path.is_file():
+            return cfg, None
+        items = [line for line in path.read_text().splitlines() if line.strip()]
+    else:
+        items = list(cfg[key]) if isinstance(cfg[key], ListConfig | list) else [cfg[key]]
+    timed = parse_timed_prompts(items)
+    if timed is None:
+        return cfg, None
+    plain = copy.deepcopy(cfg)
+    plain.prompts_file = None
+    plain["action" if key == "action" else "prompts"] = [text for text, _ in timed]
+    return plain, [seconds for _, seconds in timed]
+
+
 def num_frames(cfg: DictConfig, module: MotionDiffusionModule) -> int:
     fps, max_frames = module.hparams.fps, module.hparams.max_frames
     frames = cfg.frames if cfg.frames is not None else round(float(cfg.length) * fps)
@@ -122,8 +177,10 @@ def run(cfg: DictConfig) -> Path:
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
-    prompts = collect_prompts(cfg, module)
-    frames = num_frames(cfg, module)
+    plain, seconds = split_timed(cfg)
+    prompts = collect_prompts(plain, module)
+    frames = num_frames(cfg, module) if seconds is None else None
+    sigma = smoothing_sigma(cfg)
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)
@@ -135,6 +192,12 @@ def run(cfg: DictConfig) -> Path:
             f"steps must be between 1 and the model's {module.diffusion.num_steps} diffusion steps, got {steps}"
         )
     generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
+    summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance}
+    if seconds is not None:
+        summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma))
+        (out / "results.json").write_text(json.dumps(summary, indent=1))
+        print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
+        return out
     results = []
     for prompt in prompts:
         cond = make_condition(module, prompt, cfg.num_samples)
@@ -150,14 +213,82 @@ def run(cfg: DictConfig) -> Path:
             progress=True,
         )
         feats = module.denormalise(feats).cpu().numpy()
-        results += save_samples(out, prompt, feats, module, cfg.render)
-    summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "samples": results}
+        results += save_samples(out, prompt, feats, module, cfg.render, sigma)
+    summary["samples"] = results
     (out / "results.json").write_text(json.dumps(summary, indent=1))
     print(f"\n{len(results)} sample(s) written to {out}")
     return out
 
 
-def save_samples(out: Path, prompt: str | None, feats: np.ndarray, module, render: str) -> list[dict]:
+def smoothing_sigma(cfg: DictConfig) -> float | None:
+    sigma = cfg.get("smooth_sigma")
+    if sigma is None or sigma == 0:
+        return None
+    if isinstance(sigma, bool) or not isinstance(sigma, int | float) or not sigma > 0:
+        raise UsageError(f"smooth_sigma is a Gaussian's width in frames (> 0; null or 0: off), got {sigma!r}")
+    return float(sigma)
+
+
+def long_motion_settings(cfg, module, prompts: list, seconds: list[float]) -> tuple[float, float]:
+    """(overlap, blend) seconds for timed prompts, or a clear error for settings this model cannot do."""
+    if cfg.frames is not None:
+        raise UsageError("timed prompts set their own lengths: drop frames= (length= is ignored too)")
+    if cfg.edit_mode not in EDIT_MODES:
+        raise UsageError(f"edit_mode must be one of {', '.join(EDIT_MODES)}, got {cfg.edit_mode!r}")
+    fps, max_frames = module.hparams.fps, module.hparams.max_frames
+    overlap, blend = cfg.overlap, cfg.blend
+    if isinstance(overlap, bool) or not isinstance(overlap, int | float) or not 0 < overlap * fps < max_frames - 0.5:
+        raise UsageError(
+            f"overlap is the seconds each prompt continues from the one before: more than 0 and less than this "
+            f"model's {max_frames / fps:g} s, got {overlap!r}"
+        )
+    if isinstance(blend, bool) or not isinstance(blend, int | float) or not 0 <= blend < overlap:
+        raise UsageError(f"blend is the seconds at the end of the overlap that are cross-faded: 0 to less than "
+                         f"overlap={overlap:g}, got {blend!r}")  # fmt: skip
+    short = [f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True) if round(s * fps) < 1]
+    if short:
+        raise UsageError(f"each timed prompt needs at least one frame (1/{fps:g} s): {', '.join(short)}")
+    return float(overlap), float(blend)
+
+
+def sample_long(cfg, out: Path, module, prompts: list, seconds: list[float], guidance, steps, generator, sigma):
+    """One long motion per sample through the timed prompts; returns the results.json entries."""
+    overlap, blend = long_motion_settings(cfg, module, prompts, seconds)
+    n = cfg.num_samples
+    segments = [(make_condition(module, p, n), s) for p, s in zip(prompts, seconds, strict=True)]
+    print(f"sampling {n} long motion(s) through {len(prompts)} timed prompts ({sum(seconds):g} s)")
+    long = generate_long(
+        module, segments, overlap_s=overlap, blend_s=blend, num_samples=n, guidance=guidance,
+        sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta), generator=generator, mode=cfg.edit_mode,
+        labels=prompts, progress=True,
+    )  # fmt: skip
+    title = ", ".join(f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True))
+    rows = save_samples(
+        out, title, long.features, module, cfg.render, sigma, stem=f"long_{slug(' then '.join(prompts))}"
+    )
+    seams, blends = [w.plan.start for w in long.windows[1:]], [w.plan.blend for w in long.windows[1:]]
+    for row, joints, boundaries in zip(rows, long.joints, long.boundaries, strict=True):
+        if sigma is not None:  # the filter also runs across the seams: how they look in the saved joints
+            after = boundary_report(smooth_joints(joints, sigma), seams, long.fps, blends=blends)
+            for b, a in zip(boundaries, after, strict=True):
+                b["ratio_smoothed"] = a["ratio"]
+        row["frames"] = long.num_frames
+        row["boundaries"] = boundaries
+        row["max_boundary_ratio"] = max((b["ratio"] for b in boundaries), default=None)
+    windows = [{"segment": w.plan.segment, "start": w.plan.start, "end": w.plan.end, "overlap": w.plan.overlap,
+                "blend": w.plan.blend} for w in long.windows]  # fmt: skip
+    info = {"segments": long.segments, "windows": windows, "frames": long.num_frames,
+            "seconds": long.num_frames / long.fps, "overlap_frames": max((w["overlap"] for w in windows), default=0),
+            "blend_frames": max((w["blend"] for w in windows), default=0), "edit_mode": cfg.edit_mode,
+            "max_frames": int(module.hparams.max_frames)}  # fmt: skip
+    return {"long_motion": info, "samples": rows}
+
+
+def save_samples(
+    out: Path, prompt: str | None, feats: np.ndarray, module, render: str, sigma: float | None = None, stem=None
+) -> list[dict]:
+    """Joints, features (and a video) per sample; with ``sigma`` the saved joints are the smoothed ones (the raw
+    ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after."""
     from motiondiff.export.render import render_motion
 
     rep = module.representation
@@ -167,23 +298,32 @@ def save_samples(out: Path, prompt: str | None, feats: np.ndarray, module, rende
     rows = []
     for k, f in enumerate(feats):
         joints = rep.decode_numpy(f).astype(np.float32)  # the representation's skeleton (a rig keeps its joints)
-        stem = out / f"{slug(prompt)}_{k:02d}"
-        np.save(f"{stem}_joints.npy", joints)
-        np.save(f"{stem}_features.npy", f.astype(np.float32))
+        stem_k = out / f"{stem or slug(prompt)}_{k:02d}"
+        feature_joints = joints if bridge.identity else bridge.joints(f)  # SMPL-22/KIT-21, what `measure` reads
+        smoothing = None
+        if sigma is not None:
+            np.save(f"{stem_k}_joints_raw.npy", joints)
+            before = smoothness_of_joints(feature_joints, bridge.feature_skeleton)
+            joints, feature_joints = smooth_joints(joints, sigma), smooth_joints(feature_joints, sigma)
+            after = smoothness_of_joints(feature_joints, bridge.feature_skeleton)
+            smoothing = {"sigma_frames": sigma, "smoothness_before": before, "smoothness_after": after,
+                         "measured_on": "HumanML3D features of the joints, as evaluate.py"}  # fmt: skip
+        np.save(f"{stem_k}_joints.npy", joints)
+        np.save(f"{stem_k}_features.npy", f.astype(np.float32))
         video = None
         if render != "none":
-            video = render_motion(joints, skeleton, f"{stem}.{render}", title=prompt or "unconditioned", fps=fps)
-        feature_joints = joints if bridge.identity else bridge.joints(f)  # SMPL-22/KIT-21, what `measure` reads
+            video = render_motion(joints, skeleton, f"{stem_k}.{render}", title=prompt or "unconditioned", fps=fps)
         facts = measure(feature_joints, fps)
         speed = mean_joint_speed(feature_joints, fps)
         rows.append(
             {
                 "prompt": prompt,
                 "index": k,
-                "joints": f"{stem}_joints.npy",
+                "joints": f"{stem_k}_joints.npy",
                 "video": str(video) if video else None,
                 "mean_joint_speed": speed,
                 **asdict(facts),
+                **({"smoothing": smoothing} if smoothing else {}),
             }  # fmt: skip
         )
     return rows

@@ -1,0 +1,146 @@
+"""`python edit.py ...`: in-between a motion or regenerate some of its body parts with a trained model, and write the
+edited joints, features, the input, stick-figure videos and results.json with how well each edit kept the input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig, ListConfig
+
+from motiondiff.cli.common import UsageError, find_checkpoint
+from motiondiff.cli.sample import check_text, load_module, slug
+from motiondiff.edit.api import EditResult, InputMotion, edit_parts, inbetween, load_input_motion, training_data_root
+from motiondiff.edit.masks import EditError, frames_from_seconds
+from motiondiff.eval.editing import edit_numbers
+
+KINDS = ("inbetween", "parts")
+RENDERS = ("mp4", "gif", "none")
+
+
+def edit_condition(cfg: DictConfig, module):
+    """The text or action to edit towards; None edits unconditioned (allowed on every model)."""
+    kind = module.condition_kind
+    if cfg.text is not None and cfg.action is not None:
+        raise UsageError("give text= or action=, not both")
+    if kind == "none" and (cfg.text is not None or cfg.action is not None):
+        raise UsageError("this model is unconditioned: drop text=/action=")
+    if cfg.action is not None:
+        if kind != "action":
+            raise UsageError(f"this model is conditioned on {kind}: use text= (or nothing), not action=")
+        if cfg.action not in module.hparams.action_names:
+            raise UsageError(f"unknown action {cfg.action!r}; known actions: {', '.join(module.hparams.action_names)}")
+        return cfg.action
+    if cfg.text is not None:
+        if kind != "text":
+            raise UsageError(f"this model is conditioned on {kind}: use action= (or nothing), not text=")
+        return check_text(cfg.text)
+    return None
+
+
+def _kept(cfg: DictConfig, name: str, fps: float):
+    """prefix/suffix as the API takes them: frames (int) or a fraction (float <= 1); seconds with <name>_s."""
+    seconds = cfg.get(f"{name}_s")
+    if seconds is not None:
+        return frames_from_seconds(float(seconds), fps)
+    value = cfg.get(name)
+    if isinstance(value, str) or isinstance(value, bool):
+        raise UsageError(f"{name} must be a number (a fraction <= 1 like 0.25, or frames like 10), got {value!r}")
+    return value
+
+
+def _parts(cfg: DictConfig):
+    parts = cfg.parts
+    if isinstance(parts, ListConfig | list):
+        return list(parts)
+    if isinstance(parts, str) and "," in parts:
+        return [p.strip() for p in parts.split(",") if p.strip()]
+    return parts
+
+
+def _check(cfg: DictConfig, module) -> int | None:
+    if cfg.input is None:
+        raise UsageError(
+            "pass the motion to edit: input=<file.bvh>, input=<joints.npy> or a clip id such as "
+            "input=test:dataset-1_walk_active_001"
+        )
+    if cfg.kind not in KINDS:
+        raise UsageError(f"unknown kind {cfg.kind!r}; choose from {', '.join(KINDS)}")
+    if cfg.render not in RENDERS:
+        raise UsageError(f"unknown render {cfg.render!r}; choose from {', '.join(RENDERS)}")
+    if cfg.num_samples < 1:
+        raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
+    return cfg.steps if cfg.steps is not None else cfg.sampler.steps
+
+
+def run(cfg: DictConfig) -> Path:
+    ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
+    module = load_module(ckpt, cfg.device)
+    steps = _check(cfg, module)
+    condition = edit_condition(cfg, module)
+    fps = float(module.hparams.fps)
+    try:
+        data_root = Path(cfg.data) if cfg.data else training_data_root(module, cfg.paths.data_dir, cfg.paths.cache_dir)
+        length = None if cfg.length is None else frames_from_seconds(float(cfg.length), fps)
+        motion = load_input_motion(cfg.input, module, data_root=data_root, start=frames_from_seconds(cfg.start, fps),
+                                   frames=length)  # fmt: skip
+        if motion.window != (0, motion.total_frames):
+            print(f"editing frames {motion.window[0]}..{motion.window[1]} of the input's {motion.total_frames} "
+                  f"(the model's maximum is {module.hparams.max_frames}; choose the window with start=/length=)")  # fmt: skip
+        sampling = {"mode": cfg.mode, "num_samples": int(cfg.num_samples), "guidance": cfg.guidance,
+                    "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta), "seed": int(cfg.seed),
+                    "progress": True}  # fmt: skip
+        what = condition or "unconditioned"
+        print(f"{cfg.kind} ({cfg.mode}) of {cfg.input} ({motion.num_frames} frames) x {cfg.num_samples}: {what!r}")
+        if cfg.kind == "inbetween":
+            result = inbetween(module, motion, condition, prefix=_kept(cfg, "prefix", fps),
+                               suffix=_kept(cfg, "suffix", fps), close_root=bool(cfg.close_root), **sampling)  # fmt: skip
+        else:
+            result = edit_parts(module, motion, _parts(cfg), condition, **sampling)
+    except EditError as err:
+        raise UsageError(str(err)) from None
+    out = Path(HydraConfig.get().runtime.output_dir)
+    rows = save_edits(out, result, motion, module, cfg.render, condition)
+    summary = {
+        "checkpoint": str(ckpt),
+        "input": {"source": str(cfg.input), "clip_id": motion.clip_id, "split": motion.split, "label": motion.label,
+                  "captions": motion.captions, "window": list(motion.window), "total_frames": motion.total_frames},
+        "condition": condition,
+        "representation": module.representation.name,
+        "settings": result.settings,
+        "samples": rows,
+    }  # fmt: skip
+    (out / "results.json").write_text(json.dumps(summary, indent=1))
+    for r in rows:
+        extra = (f"max boundary ratio {r['max_boundary_ratio']:.2f}" if result.kind == "inbetween"
+                 else f"root-relative kept error {r['root_relative_kept_max_error_m']:.1e} m")  # fmt: skip
+        print(f"  sample {r['index']}: kept-part error {r['kept_max_error_m']:.1e} m, {extra}")
+    print(f"\n{len(rows)} edit(s) written to {out}")
+    return out
+
+
+def save_edits(out: Path, result: EditResult, motion: InputMotion, module, render: str, condition) -> list[dict]:
+    from motiondiff.export.render import render_motion
+
+    fps = float(module.hparams.fps)
+    title = f"{result.kind}: {condition or 'unconditioned'}"
+    input_video = None
+    if render != "none":
+        input_video = render_motion(motion.joints, result.skeleton, out / f"input.{render}", title="input", fps=fps)
+    np.save(out / "keep_mask.npy", result.keep[0])
+    rows = []
+    for k in range(len(result)):
+        stem = out / f"{result.kind}_{slug(condition)}_{k:02d}"
+        files = {"joints": f"{stem}_joints.npy", "features": f"{stem}_features.npy",
+                 "input_joints": f"{stem}_input_joints.npy"}  # fmt: skip
+        np.save(files["joints"], result.joints[k])
+        np.save(files["features"], result.features[k])
+        np.save(files["input_joints"], result.input_joints[k])
+        video = None
+        if render != "none":
+            video = str(render_motion(result.joints[k], result.skeleton, f"{stem}.{render}", title=title, fps=fps))
+        rows.append({"index": k, **files, "video": video, "input_video": str(input_video) if input_video else None,
+                     **edit_numbers(result, k, fps)})  # fmt: skip
+    return rows

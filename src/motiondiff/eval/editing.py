@@ -1,0 +1,273 @@
+"""Does editing keep what it should and change what it should? Measurements on real test clips.
+
+    python -m motiondiff.eval.editing [checkpoint=latest] [num_edits=20] [num_part_edits=10] [split=test]
+        [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [seed=0] [data=<prepared folder>]
+        [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
+
+(a) In-betweening of ``num_edits`` clips of the split (first and last 25% kept, each clip's own caption or action as
+    the condition): the largest decoded error on the kept frames (m), and per boundary the joint-speed jump
+        ratio = speed of the step across the boundary / max(median step speed of the generated middle, 0.1 m/s),
+    speed of a step = mean over joints of |x_{k+1} - x_k| · fps (m/s). A ratio near 1 is a seamless boundary; the
+    report gives the largest ratio and the share <= 3. (The floor keeps a near-still middle from turning sensor-level
+    jitter into huge ratios.)
+(b) Body-part editing of ``num_part_edits`` WALKING clips (content label or caption containing "walk"; the test
+    split first, then val and train if it has too few) keeping ``lower_body`` (legs and root trajectory) with
+    ``text``: the largest root-relative error of the kept joints (m), and how many edits have both wrists above the
+    head - wrist y above head y on the feature skeleton (SMPL-22 via the representation's bridge) for >= 25% of the
+    frames - next to the same count on the unedited inputs.
+(c) Both modes (overwrite, repaint) with the same seed, side by side. Writes report.md and report.json.
+
+The measurement functions are shared with ``edit.py`` (its results.json).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+SPEED_FLOOR = 0.1  # m/s: the least "median generated speed" a boundary jump is divided by
+MAX_RATIO = 3.0  # a boundary step at most 3x the generated middle's typical speed counts as seamless
+WRISTS_UP_SHARE = 0.25  # share of frames with both wrists above the head that counts as "hands raised"
+DEFAULT_TEXT = "a person raises both hands"
+
+
+# ---- measurements -------------------------------------------------------------------------------------------------
+def step_speeds(joints: np.ndarray, fps: float) -> np.ndarray:
+    """(N-1,) speed of each frame-to-frame step, mean over joints of |x_{k+1} - x_k| · fps (m/s)."""
+    return np.linalg.norm(np.diff(np.asarray(joints, dtype=np.float64), axis=0), axis=-1).mean(-1) * fps
+
+
+def kept_max_error(joints: np.ndarray, input_joints: np.ndarray, kept: np.ndarray) -> float:
+    """Largest distance (m) between edited and input joints where ``kept`` ((N, J) bool) fixes them."""
+    dist = np.linalg.norm(np.asarray(joints, np.float64) - np.asarray(input_joints, np.float64), axis=-1)
+    return float(dist[kept].max()) if kept.any() else 0.0
+
+
+def root_relative_max_error(joints: np.ndarray, input_joints: np.ndarray, kept_joints) -> float:
+    """Largest distance (m) of the kept joints relative to the root (joint 0), over every frame."""
+    rel = np.asarray(joints, np.float64) - np.asarray(joints, np.float64)[:, :1]
+    rel_in = np.asarray(input_joints, np.float64) - np.asarray(input_joints, np.float64)[:, :1]
+    idx = list(kept_joints)
+    return float(np.linalg.norm(rel[:, idx] - rel_in[:, idx], axis=-1).max()) if idx else 0.0
+
+
+def boundary_jumps(joints: np.ndarray, kept_frames: np.ndarray, fps: float, floor: float = SPEED_FLOOR) -> dict:
+    """Each kept/generated boundary's step speed over the generated middle's median step speed (module docstring).
+    Returns {"median_generated_speed", "boundaries": [{"frame", "side", "speed", "ratio"}]}; "frame" is the
+    first frame after the boundary, "side" "start" (kept -> generated) or "end" (generated -> kept)."""
+    speeds = step_speeds(joints, fps)
+    kept = np.asarray(kept_frames, dtype=bool)
+    middle = ~kept[:-1] & ~kept[1:]
+    median = float(np.median(speeds[middle])) if middle.any() else 0.0
+    scale = max(median, floor)
+    rows = [{"frame": int(k + 1), "side": "start" if kept[k] else "end", "speed": float(speeds[k]),
+             "ratio": float(speeds[k] / scale)} for k in np.flatnonzero(kept[:-1] != kept[1:])]  # fmt: skip
+    return {"median_generated_speed": median, "boundaries": rows}
+
+
+def wrists_up_share(joints: np.ndarray, skeleton) -> float:
+    """Share of frames with both wrists (last joint of each arm preset) above the head (last head joint)."""
+    head = skeleton.parts["head"][-1]
+    wrists = [skeleton.parts["left_arm"][-1], skeleton.parts["right_arm"][-1]]
+    up = (np.asarray(joints)[:, wrists, 1] > np.asarray(joints)[:, [head], 1]).all(-1)
+    return float(up.mean())
+
+
+def edit_numbers(result, i: int, fps: float) -> dict:
+    """What results.json reports per edit: kept-part error, and boundary jumps (in-betweening) or the kept joints'
+    root-relative error (body parts)."""
+    joints, inputs = result.joints[i], result.input_joints[i]
+    row = {"kept_max_error_m": kept_max_error(joints, inputs, result.kept_points(i))}
+    if result.kind == "inbetween":
+        jumps = boundary_jumps(joints, result.kept_frames[i], fps)
+        row.update(jumps, max_boundary_ratio=max((b["ratio"] for b in jumps["boundaries"]), default=0.0))
+    else:
+        row["root_relative_kept_max_error_m"] = root_relative_max_error(joints, inputs, result.kept_joints)
+    return row
+
+
+# ---- the acceptance run -------------------------------------------------------------------------------------------
+def _clip_condition(module, motion):
+    """The clip's own condition: its first caption (text models), its label (action models), or None."""
+    if module.condition_kind == "text" and motion.captions:
+        return motion.captions[0]
+    if module.condition_kind == "action" and motion.label in (module.hparams.get("action_names") or []):
+        return motion.label
+    return None
+
+
+def _raise_condition(module, text: str):
+    if module.condition_kind == "text":
+        return text
+    names = module.hparams.get("action_names") or []
+    return "raise-up-both-hands" if module.condition_kind == "action" and "raise-up-both-hands" in names else None
+
+
+def walking_clips(module, split: str, count: int, data_root=None) -> list:
+    """``count`` clips whose label or a caption contains "walk": from ``split`` first, then the other splits."""
+    from motiondiff.edit.api import dataset_motions
+
+    found = []
+    for name in dict.fromkeys([split, "val", "train"]):
+        for m in dataset_motions(module, name, data_root):
+            if "walk" in (m.label or "") or any("walk" in c.lower() for c in m.captions):
+                found.append(m)
+        if len(found) >= count:
+            break
+    return found[:count]
+
+
+def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, modes=("overwrite", "repaint"),
+                     text=DEFAULT_TEXT, parts="lower_body", data_root=None, seed=0, **sampling) -> dict:  # fmt: skip
+    """The numbers of the module docstring, per mode. ``sampling``: sampler, steps, eta, guidance."""
+    from motiondiff.data.representation_spec import bridge_from_spec
+    from motiondiff.edit.api import dataset_motions, edit_parts, inbetween
+
+    fps = float(module.hparams.fps)
+    bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
+    clips = dataset_motions(module, split, data_root)[:num_edits]
+    walks = walking_clips(module, split, num_part_edits, data_root)
+    raise_cond = _raise_condition(module, text)
+    inputs_up = [wrists_up_share(bridge.joints(m.features), bridge.feature_skeleton) for m in walks]
+    report = {"split": split, "fps": fps, "sampling": sampling, "seed": seed, "modes": {},
+              "inbetween_clips": [m.source for m in clips], "parts_clips": [m.source for m in walks],
+              "parts": parts, "text": raise_cond,
+              "inputs_wrists_up": int(sum(s >= WRISTS_UP_SHARE for s in inputs_up))}  # fmt: skip
+    for mode in modes:
+        t0 = time.perf_counter()
+        conds = [_clip_condition(module, m) for m in clips]
+        if any(c is None for c in conds):
+            conds = None  # a batch is conditioned or not
+        ib = inbetween(module, clips, conds, mode=mode, seed=seed, **sampling)
+        ib_rows = [edit_numbers(ib, i, fps) for i in range(len(ib))]
+        # the same boundaries measured on the unedited clips: what a seamless in-betweening scores
+        real = [b["ratio"] for m, k in zip(clips, ib.kept_frames, strict=True)
+                for b in boundary_jumps(m.joints, k, fps)["boundaries"]]  # fmt: skip
+        report["inputs_boundary_ratio"] = {"max": max(real), "median": float(np.median(real)),
+                                           "share_le_3": float(np.mean(np.array(real) <= MAX_RATIO))}  # fmt: skip
+        ratios = [b["ratio"] for r in ib_rows for b in r["boundaries"]]
+        bp = edit_parts(module, walks, parts, [raise_cond] * len(walks), mode=mode, seed=seed, **sampling)
+        bp_rows = [edit_numbers(bp, i, fps) for i in range(len(bp))]
+        up = [wrists_up_share(bridge.joints(f), bridge.feature_skeleton) for f in bp.features]
+        report["modes"][mode] = {
+            "inbetween": {
+                "edits": len(ib),
+                "conditioned_on": "clip captions/actions" if conds else "nothing (unconditioned)",
+                "max_kept_error_m": max(r["kept_max_error_m"] for r in ib_rows),
+                "max_boundary_ratio": max(ratios),
+                "median_boundary_ratio": float(np.median(ratios)),
+                "share_ratio_le_3": float(np.mean(np.array(ratios) <= MAX_RATIO)),
+                "per_edit": [{"clip": m.source, **r} for m, r in zip(clips, ib_rows, strict=True)],
+            },
+            "parts": {
+                "edits": len(bp),
+                "max_root_relative_kept_error_m": max(r["root_relative_kept_max_error_m"] for r in bp_rows),
+                "max_kept_error_m": max(r["kept_max_error_m"] for r in bp_rows),
+                "wrists_up_edits": int(sum(s >= WRISTS_UP_SHARE for s in up)),
+                "per_edit": [
+                    {"clip": m.source, "wrists_up_share": s, **r} for m, s, r in zip(walks, up, bp_rows, strict=True)
+                ],  # fmt: skip
+            },
+            "wall_s": time.perf_counter() - t0,
+        }
+    return report
+
+
+def format_report(report: dict, checkpoint: str = "") -> str:
+    s = report["sampling"]
+    ib0 = next(iter(report["modes"].values()))["inbetween"]
+    lines = [
+        "# Motion editing on real clips",
+        "",
+        f"Checkpoint: `{checkpoint}`  ",
+        f"Sampler: {s.get('sampler')} (steps {s.get('steps')}, eta {s.get('eta', 0.0)}), guidance "
+        f"{s.get('guidance') if s.get('guidance') is not None else 'model default'}, seed {report['seed']}",
+        "",
+        f"## (a) In-betweening: {ib0['edits']} {report['split']} clips, first and last 25% kept",
+        "",
+        f"Conditioned on {ib0['conditioned_on']}. Ratio = speed of the step across a boundary / max(median step "
+        f"speed of the generated middle, {SPEED_FLOOR} m/s); step speed = mean joint displacement x fps.",
+        "",
+        "| Mode | Max kept-frame error (m) | Max boundary ratio | Median ratio | Share of boundaries <= 3 |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for mode, r in report["modes"].items():
+        a = r["inbetween"]
+        lines.append(f"| {mode} | {a['max_kept_error_m']:.2e} | {a['max_boundary_ratio']:.2f} | "
+                     f"{a['median_boundary_ratio']:.2f} | {a['share_ratio_le_3']:.0%} |")  # fmt: skip
+    real = report["inputs_boundary_ratio"]
+    lines.append(f"| unedited clips (reference) | – | {real['max']:.2f} | {real['median']:.2f} | "
+                 f"{real['share_le_3']:.0%} |")  # fmt: skip
+    n = len(report["parts_clips"])
+    lines += [
+        "",
+        f"## (b) Body-part editing: `{report['parts']}` kept on {n} walking clips, condition {report['text']!r}",
+        "",
+        f"Wrists up = both wrists above the head for >= {WRISTS_UP_SHARE:.0%} of the frames (feature skeleton). "
+        f"Unedited inputs with wrists up: {report['inputs_wrists_up']} of {n}.",
+        "",
+        "| Mode | Max root-relative kept-joint error (m) | Max world kept-joint error (m) | Edits with wrists up |",
+        "|---|---:|---:|---:|",
+    ]
+    for mode, r in report["modes"].items():
+        b = r["parts"]
+        lines.append(f"| {mode} | {b['max_root_relative_kept_error_m']:.2e} | {b['max_kept_error_m']:.2e} | "
+                     f"{b['wrists_up_edits']} of {b['edits']} |")  # fmt: skip
+    lines += ["", "Clips: in-betweening " + ", ".join(report["inbetween_clips"]),
+              "", "Walking clips: " + ", ".join(report["parts_clips"]), ""]  # fmt: skip
+    return "\n".join(lines)
+
+
+KEYS = ("checkpoint", "num_edits", "num_part_edits", "split", "modes", "sampler", "steps", "eta", "guidance", "seed",
+        "data", "text", "parts", "out", "device")  # fmt: skip
+
+
+def main(argv: list[str]) -> Path:
+    from motiondiff.cli.common import REPO_DIR, UsageError, find_checkpoint, quiet_tool_caches
+    from motiondiff.cli.sample import load_module
+    from motiondiff.edit.masks import EditError
+
+    quiet_tool_caches()
+    args = {}
+    for a in argv:
+        key, eq, value = a.partition("=")
+        if not eq or key not in KEYS:
+            raise UsageError(f"unknown argument {a!r}; arguments are key=value with key one of {', '.join(KEYS)}")
+        args[key] = value
+    outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
+    ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
+    module = load_module(ckpt, args.get("device", "cpu"))
+    sampling = {"sampler": args.get("sampler", "ddim"), "eta": float(args.get("eta", 0.0))}
+    steps = args.get("steps", "50")
+    sampling["steps"] = None if steps in ("null", "None") else int(steps)  # null: every step of the sampler
+    if "guidance" in args:
+        sampling["guidance"] = float(args["guidance"])
+    try:
+        report = evaluate_editing(
+            module, split=args.get("split", "test"), num_edits=int(args.get("num_edits", 20)),
+            num_part_edits=int(args.get("num_part_edits", 10)), modes=tuple(args.get("modes", "overwrite,repaint").split(",")),
+            text=args.get("text", DEFAULT_TEXT), parts=args.get("parts", "lower_body"), data_root=args.get("data"),
+            seed=int(args.get("seed", 0)), **sampling,
+        )  # fmt: skip
+    except EditError as err:
+        raise UsageError(str(err)) from None
+    out = Path(args.get("out") or outputs / "edit_eval" / time.strftime("%Y-%m-%d_%H-%M-%S"))
+    out.mkdir(parents=True, exist_ok=True)
+    report["checkpoint"] = str(ckpt)
+    text = format_report(report, str(ckpt))
+    (out / "report.md").write_text(text)
+    (out / "report.json").write_text(json.dumps(report, indent=1))
+    print(text)
+    print(f"report written to {out}")
+    return out
+
+
+if __name__ == "__main__":
+    from motiondiff.cli.common import user_errors
+
+    user_errors(main)(sys.argv[1:])
