@@ -32,6 +32,7 @@ def save_release(module, path: str | Path, provenance: dict | None = None) -> tu
     state = {k: v.detach().cpu().contiguous() for k, v in module.state_dict().items()}
     hparams = json.loads(json.dumps(dict(module.hparams), default=_plain))  # fails loudly on a non-JSON value
     meta = {"format": FORMAT, "class": type(module).__name__, "hparams": hparams, "provenance": provenance or {}}
+    weights.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(weights, lambda tmp: save_file(state, str(tmp)), suffix=".safetensors")
     atomic_write(config, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)), suffix=".json")
     return weights, config
