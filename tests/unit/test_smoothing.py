@@ -14,7 +14,8 @@ from motiondiff.skeleton import SMPL22
 
 
 def test_an_impulse_becomes_the_normalised_gaussian():
-    """σ = 1 frame, kernel |k| ≤ 4: w_k = e^{−k²/2} / Σ e^{−k'²/2}; Σ = 1 + 2(e^−½ + e^−2 + e^−4.5 + e^−8) = 2.5066208."""
+    """σ = 1 frame, kernel |k| ≤ 4: w_k = e^{−k²/2} / Σ e^{−k'²/2},
+    Σ = 1 + 2(e^−½ + e^−2 + e^−4.5 + e^−8) = 2.5066208."""
     x = np.zeros((11, 1, 3))
     x[5, 0] = [1.0, -2.0, 0.0]
     out = smooth_joints(x, 1.0)

@@ -176,8 +176,8 @@ def slug(text: str | None) -> str:
 def run(cfg: DictConfig) -> Path:
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
+    plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
     module = load_module(ckpt, cfg.device)
-    plain, seconds = split_timed(cfg)
     prompts = collect_prompts(plain, module)
     frames = num_frames(cfg, module) if seconds is None else None
     sigma = smoothing_sigma(cfg)

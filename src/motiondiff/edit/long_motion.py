@@ -146,9 +146,8 @@ def generate_long(
 ) -> LongMotion:
     """``segments``: (condition, seconds) in order; a condition is what ``module.sample`` takes for a batch of
     ``num_samples`` (text features, action ids, or None). ``blend_s``: seconds at the end of each overlap that are
-    cross-faded instead of held (0: hold all; 0.25 s took the measured seam jumps of the
-    shipped cpu model from 3.0x to 2.3x the median step). Returns ``num_samples`` long motions of Σ round(seconds · fps) frames
-    each."""
+    cross-faded instead of held (0: hold all; 0.25 s took the largest seam step of the shipped cpu model from 3.0x
+    to 2.3x its median step). Returns ``num_samples`` long motions of Σ round(seconds · fps) frames each."""
     if not segments:
         raise ValueError("give at least one (condition, seconds) segment")
     if mode not in EDIT_MODES:
@@ -174,27 +173,14 @@ def generate_long(
     windows = []
     for plan in plans:
         cond = segments[plan.segment][0]
-        lengths = torch.full((num_samples,), plan.length)
         if plan.overlap == 0:
-            yaw, offset = np.zeros(num_samples), np.zeros((num_samples, 3))
-            window = _denormalise(module.sample(cond, lengths, generator=generator, **sampling), mean, std)
+            lengths = torch.full((num_samples,), plan.length)
+            out = module.sample(cond, lengths, generator=generator, **sampling)
+            window = Window(plan, _denormalise(out, mean, std), np.zeros(num_samples), np.zeros((num_samples, 3)))
         else:
-            first = plan.start - plan.overlap
-            yaw, offset = placement(rep, motion, first)
-            prefix = to_canonical(rep, motion[:, first:], yaw, offset)
-            held = plan.held
-            known = np.zeros((num_samples, plan.length, len(mean)))
-            known[:, :held] = (prefix[:, :held] - mean) / std
-            keep = torch.zeros(num_samples, plan.length, 1, dtype=torch.bool)
-            keep[:, :held] = True
-            out = inpaint(module, cond, torch.from_numpy(known).float(), keep, lengths, mode=mode,
-                          generator=generator, **sampling)  # fmt: skip
-            window = _denormalise(out, mean, std)
-            window[:, :held] = prefix[:, :held]  # the held rows, without the float32 round trip of normalising
-            w = (np.arange(1, plan.blend + 1) / (plan.blend + 1))[:, None]
-            window[:, held : plan.overlap] = (1 - w) * prefix[:, held:] + w * window[:, held : plan.overlap]
-        windows.append(Window(plan, window, yaw, offset))
-        placed = from_canonical(rep, window, yaw, offset)
+            window = _continue(module, motion, plan, cond, mean, std, mode=mode, generator=generator, **sampling)
+        windows.append(window)
+        placed = from_canonical(rep, window.features, window.yaw, window.offset)
         # the blended frames replace the motion's last ones (hml: rows before them decode unchanged)
         motion = np.concatenate([motion[:, : plan.start - plan.blend], placed[:, plan.held :]], axis=1)
 
@@ -206,6 +192,25 @@ def generate_long(
     blends = [w.plan.blend for w in windows[1:]]
     report = [boundary_report(j, seams, fps, seam_labels, blends) for j in joints]
     return LongMotion(motion, joints, fps, spans, windows, report)
+
+
+def _continue(module, motion: np.ndarray, plan: WindowPlan, cond, mean, std, **sampling) -> Window:
+    """The window that continues ``motion`` (B, plan.start, D): its overlap placed canonically, the held frames
+    in-painted, the blended ones cross-faded, x_i ← (1 − w_i) x_i^before + w_i x_i^window, w_i = i / (b + 1)."""
+    rep, b, held = module.representation, len(motion), plan.held
+    first = plan.start - plan.overlap
+    yaw, offset = placement(rep, motion, first)
+    prefix = to_canonical(rep, motion[:, first:], yaw, offset)
+    known = np.zeros((b, plan.length, len(mean)))
+    known[:, :held] = (prefix[:, :held] - mean) / std
+    keep = torch.zeros(b, plan.length, 1, dtype=torch.bool)
+    keep[:, :held] = True
+    out = inpaint(module, cond, torch.from_numpy(known).float(), keep, torch.full((b,), plan.length), **sampling)
+    window = _denormalise(out, mean, std)
+    window[:, :held] = prefix[:, :held]  # the held rows, without the float32 round trip of normalising
+    w = (np.arange(1, plan.blend + 1) / (plan.blend + 1))[:, None]
+    window[:, held : plan.overlap] = (1 - w) * prefix[:, held:] + w * window[:, held : plan.overlap]
+    return Window(plan, window, yaw, offset)
 
 
 def _denormalise(features: torch.Tensor, mean: np.ndarray, std: np.ndarray) -> np.ndarray:
