@@ -27,7 +27,7 @@ $(VENV)/.installed: pyproject.toml requirements.lock
 PROMPTS := [a person walks forward, a person raises both hands, a person runs, a person bows]
 train: setup
 	$(PY) train.py experiment=cpu_quickstart
-	$(PY) sample.py "prompts=$(PROMPTS)" num_samples=2 length=4 render=mp4
+	$(PY) sample.py "prompts=$(PROMPTS)" num_samples=2 length=4 export=mp4
 	$(PY) -m motiondiff.eval.behaviour num_samples=10
 	@echo "checkpoint: $$(ls -t outputs/train/*/checkpoints/last.ckpt | head -1)"
 	@echo "samples:    $$(ls -td outputs/sample/*/ | head -1)"

@@ -22,7 +22,7 @@ def test_train_and_sample_with_backbone(tmp_path, backbone):
     assert any(k.startswith("denoiser.backbone.") for k in saved["state_dict"])
 
     run_cli("sample.py", f"checkpoint={ckpt}", "text=a person walks", "num_samples=1", "length=1", "sampler=ddim",
-            "steps=2", "render=none", env_dir=tmp_path)  # fmt: skip
+            "steps=2", "export=none", env_dir=tmp_path)  # fmt: skip
     sample = json.loads(next((tmp_path / "outputs").glob("sample/*/results.json")).read_text())["samples"][0]
     joints = np.load(sample["joints"])
     assert joints.shape == (20, 22, 3) and np.isfinite(joints).all()

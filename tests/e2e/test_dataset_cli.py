@@ -89,7 +89,7 @@ def test_action_datasets_train_in_their_pickled_layouts(tmp_path, dataset):
     assert hp["feature_dim"] == 3 + 6 * 24 and hp["loss"]["lambda_foot"] == 1.0
     assert len(hp["action_names"]) == (12 if dataset == "humanact12" else 40)
     run_cli("sample.py", f"checkpoint={ckpt}", f"action={hp['action_names'][0]}", "num_samples=1", "length=1",
-            "sampler=ddim", "steps=2", "render=none", env_dir=tmp_path)  # fmt: skip
+            "sampler=ddim", "steps=2", "export=none", env_dir=tmp_path)  # fmt: skip
     sample = json.loads(next((tmp_path / "outputs").glob("sample/*/results.json")).read_text())["samples"][0]
     assert np.load(sample["joints"]).shape == (20, 24, 3)
 

@@ -21,7 +21,7 @@ from motiondiff.skeleton import SMPL22
 
 register_resolvers()
 CLIP_ID = "dataset-1_walk_active_001"
-FAST = ["sampler=ddim", "steps=5", "num_samples=2", "render=none"]
+FAST = ["sampler=ddim", "steps=5", "num_samples=2", "export=none"]
 TOL = 1e-4  # metres
 
 
@@ -105,7 +105,7 @@ def test_joints_npy_input_a_window_and_videos(text_ckpt, tmp_path, clip):
     npy = tmp_path / "walk_joints.npy"
     np.save(npy, clip["joints"])
     out, res = _edit(tmp_path, text_ckpt, f"input={npy}", "kind=parts", "parts=[left_leg,right_leg,pelvis]",
-                     "length=1", "num_samples=1", "render=gif")  # fmt: skip
+                     "length=1", "num_samples=1", "export=gif")  # fmt: skip
     row = res["samples"][0]
     inputs = np.load(row["input_joints"])
     assert res["input"]["window"] == [0, 21] and inputs.shape == (20, 22, 3)  # 1 s = 20 edited frames

@@ -12,7 +12,7 @@ from cli_helpers import run_cli
 from motiondiff.cli.common import UsageError
 from motiondiff.cli.sample import parse_timed_prompts
 
-FAST = ["sampler=ddim", "steps=5", "render=none", "num_samples=1"]
+FAST = ["sampler=ddim", "steps=5", "export=none", "num_samples=1"]
 
 
 def results_of(tmp_path) -> tuple[dict, object]:
@@ -66,7 +66,7 @@ def test_timed_actions_make_one_long_motion(action_ckpt, tmp_path):
     ],
 )
 def test_timed_prompt_errors_are_one_clear_line(text_ckpt, tmp_path, overrides, message):
-    proc = run_cli("sample.py", f"checkpoint={text_ckpt}", *overrides, "render=none", env_dir=tmp_path, check=False)
+    proc = run_cli("sample.py", f"checkpoint={text_ckpt}", *overrides, "export=none", env_dir=tmp_path, check=False)
     assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr
 
 

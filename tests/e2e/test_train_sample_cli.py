@@ -28,7 +28,7 @@ def test_train_writes_checkpoint_and_logs(text_ckpt):
 def test_sample_text_writes_joints_features_and_video(text_ckpt, tmp_path):
     run_cli(
         "sample.py", f"checkpoint={text_ckpt}", "text=a person walks forward", "num_samples=2", "length=1.5",
-        "render=gif", "sampler.steps=4", env_dir=tmp_path,
+        "export=gif", "sampler.steps=4", env_dir=tmp_path,
     )  # fmt: skip
     out = next((tmp_path / "outputs" / "sample").iterdir())
     results = json.loads((out / "results.json").read_text())["samples"]
@@ -46,14 +46,14 @@ def test_sample_is_deterministic_for_a_seed(text_ckpt, tmp_path):
         d = tmp_path / str(k)
         d.mkdir()
         run_cli("sample.py", f"checkpoint={text_ckpt}", "text=a person bows", "num_samples=1", "length=1",
-                "render=none", "sampler.steps=3", "seed=7", env_dir=d)  # fmt: skip
+                "export=none", "sampler.steps=3", "seed=7", env_dir=d)  # fmt: skip
         outs.append(np.load(next((d / "outputs" / "sample").glob("*/a_person_bows_00_joints.npy"))))
     np.testing.assert_array_equal(outs[0], outs[1])
 
 
 def test_action_sampling_and_guidance_sweep(action_ckpt, tmp_path):
     run_cli("sample.py", "-m", f"checkpoint={action_ckpt}", "action=walk", "guidance=1,3", "num_samples=1",
-            "length=1", "render=none", "sampler.steps=3", env_dir=tmp_path)  # fmt: skip
+            "length=1", "export=none", "sampler.steps=3", env_dir=tmp_path)  # fmt: skip
     sweep = next((tmp_path / "outputs" / "sample_multirun").iterdir())
     assert sorted(p.name for p in sweep.iterdir() if p.is_dir()) == ["guidance=1", "guidance=3"]
     for sub in ("guidance=1", "guidance=3"):
@@ -75,7 +75,7 @@ def test_sample_errors_are_one_clear_line(text_ckpt, tmp_path, overrides, messag
     args = [a if a.startswith("checkpoint=") else a for a in overrides]
     if not any(a.startswith("checkpoint=") for a in args):
         args.insert(0, f"checkpoint={text_ckpt}")
-    proc = run_cli("sample.py", *args, "render=none", env_dir=tmp_path, check=False)
+    proc = run_cli("sample.py", *args, "export=none", env_dir=tmp_path, check=False)
     assert proc.returncode == 2
     assert message in proc.stderr and "Traceback" not in proc.stderr
     assert not list((tmp_path / "outputs").glob("sample/*/*.npy"))  # nothing written
@@ -132,3 +132,32 @@ def test_kill_and_resume_continues_from_saved_step(tmp_path):
     assert min(steps) >= saved  # the resumed run logged only steps after the checkpoint
     print(f"\nkilled with {len(ckpts)} checkpoints on disk; resumed from step {saved}, first logged step {min(steps)}, "
           f"finished at {saved + 3}")  # fmt: skip
+
+
+def test_shipped_model_samples_with_every_export(tmp_path):
+    """checkpoint=shipped loads the released safetensors model (no training needed) and export= writes a BVH that
+    reads back as the saved joints and a self-contained HTML viewer next to the arrays."""
+    from motiondiff.data.bvh import read_bvh
+
+    run_cli("sample.py", "checkpoint=shipped", "text=a person walks forward", "num_samples=1", "length=1",
+            "sampler.steps=3", "export=[bvh,html]", env_dir=tmp_path)  # fmt: skip
+    out = next((tmp_path / "outputs" / "sample").iterdir())
+    summary = json.loads((out / "results.json").read_text())
+    assert summary["checkpoint"].endswith("bandai_mini_text_cpu.safetensors")
+    (row,) = summary["samples"]
+    exports = row["exports"]
+    assert set(exports) >= {"bvh", "html"} and row["video"] is None
+    # a BVH has one bone length per bone; generated joints stretch bones by ~1 cm, which IK cannot follow
+    assert exports["bvh_max_error_m"] < 0.03 and exports["bvh_method"] == "ik"
+    joints = np.load(row["joints"])
+    motion = read_bvh(exports["bvh"])
+    assert motion.num_frames == len(joints)
+    assert os.path.getsize(exports["html"]) > 1_000_000  # plotly.js inside: opens offline
+
+
+def test_bad_export_format_is_named_before_sampling(tmp_path):
+    proc = run_cli("sample.py", "checkpoint=shipped", "text=a person waves", "export=[mp4,fbx]", env_dir=tmp_path,
+                   check=False)  # fmt: skip
+    assert proc.returncode == 2
+    assert "unknown export format(s) fbx; choose from mp4, gif, bvh, html" in proc.stderr
+    assert not (tmp_path / "outputs" / "sample").exists() or not any((tmp_path / "outputs" / "sample").rglob("*.npy"))

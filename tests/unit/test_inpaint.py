@@ -75,3 +75,66 @@ def test_bad_mode_is_named(module):
     with pytest.raises(ValueError, match="overwrite, repaint"):
         inpaint(module, None, torch.zeros(1, 4, module.hparams.feature_dim), torch.ones(1, 4, 1, dtype=torch.bool),
                 torch.tensor([4]), mode="paint")  # fmt: skip
+
+
+def test_renoise_step_is_q_of_x_t_given_x_prev():
+    """RePaint's jump back: x_t ~ N(√(ᾱ_t/ᾱ_prev) x_prev, (1 − ᾱ_t/ᾱ_prev) I), checked on 200k draws."""
+    from motiondiff.diffusion.samplers import renoise_step
+
+    x_prev = torch.full((200_000,), 0.7, dtype=torch.float64)
+    a_t, a_prev = 0.3, 0.8
+    x_t = renoise_step(x_prev, a_t, a_prev, torch.Generator().manual_seed(0))
+    assert abs(x_t.mean().item() - (a_t / a_prev) ** 0.5 * 0.7) < 0.005
+    assert abs(x_t.var().item() - (1 - a_t / a_prev)) < 0.005
+
+
+@pytest.mark.parametrize("sampler", ["ddim", "ddpm"])
+def test_resampling_repeats_each_step_but_the_last(sampler):
+    """resample=U: U model calls and U hook calls per step except the final clean one; U=1 is the plain sampler."""
+    from motiondiff.diffusion.process import GaussianDiffusion
+
+    diffusion = GaussianDiffusion.create(num_steps=100)
+    fn = {"ddim": ddim_sample, "ddpm": ddpm_sample}[sampler]
+    calls, hooks = [], []
+
+    def model(x, t):
+        calls.append(int(t[0]))
+        return torch.zeros_like(x)
+
+    def hook(x, t):
+        hooks.append(t)
+        return x
+
+    gen = torch.Generator().manual_seed(0)
+    fn(diffusion, model, (1, 4, 3), steps=4, resample=3, xt_hook=hook, generator=gen)
+    assert calls == [99] * 3 + [66] * 3 + [33] * 3 + [0]
+    assert hooks == [66] * 3 + [33] * 3 + [0] * 3 + [-1]
+    plain = fn(diffusion, model, (1, 4, 3), steps=4, generator=torch.Generator().manual_seed(0))
+    again = fn(diffusion, model, (1, 4, 3), steps=4, resample=1, generator=torch.Generator().manual_seed(0))
+    assert torch.equal(plain, again)
+    with pytest.raises(ValueError, match="resample"):
+        fn(diffusion, model, (1, 4, 3), steps=4, resample=0)
+
+
+@pytest.mark.parametrize("mode", ["overwrite", "repaint"])
+def test_resampled_inpainting_keeps_the_known_part(module, mode):
+    b, n, d = 1, 20, module.hparams.feature_dim
+    known = torch.randn(b, n, d, generator=torch.Generator().manual_seed(2))
+    keep = torch.zeros(b, n, 1, dtype=torch.bool)
+    keep[:, :5] = keep[:, -5:] = True
+    out = inpaint(module, None, known, keep, torch.full((b,), n), mode=mode, sampler="ddim", steps=4, resample=3,
+                  generator=torch.Generator().manual_seed(0))  # fmt: skip
+    assert torch.equal(out[:, :5], known[:, :5]) and torch.equal(out[:, -5:], known[:, -5:])
+
+
+def test_sampling_options_name_the_bad_value(module):
+    from motiondiff.edit.inpaint import SamplingOptions
+
+    with pytest.raises(ValueError, match="unknown sampling option.*resample"):
+        SamplingOptions.from_kwargs({"resampel": 2})
+    for bad, match in (({"sampler": "euler"}, "ddim, ddpm"), ({"steps": 0}, "between 1"), ({"resample": 0}, ">= 1"),
+                       ({"guidance": -1.0}, "guidance must be >= 0")):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            SamplingOptions(**bad).resolved(module, conditioned=True)
+    assert SamplingOptions(guidance=3.0).resolved(module, conditioned=False).guidance is None
+    assert SamplingOptions().resolved(module, conditioned=True).guidance == module.default_guidance

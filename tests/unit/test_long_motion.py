@@ -131,7 +131,10 @@ def test_boundary_report_by_hand():
 
 
 def test_bad_requests_are_named():
-    module = SimpleNamespace(hparams=SimpleNamespace(fps=20.0, max_frames=MAX_FRAMES))  # refused before sampling
+    module = SimpleNamespace(
+        hparams=SimpleNamespace(fps=20.0, max_frames=MAX_FRAMES),  # refused before sampling
+        diffusion=SimpleNamespace(num_steps=1000),
+    )
     with pytest.raises(ValueError, match="overlap must be positive"):
         generate_long(module, [(None, 1.0)], overlap_s=0)
     with pytest.raises(ValueError, match="segment 2 lasts -1"):

@@ -10,6 +10,9 @@ from pathlib import Path
 from omegaconf import DictConfig, OmegaConf
 
 REPO_DIR = Path(__file__).resolve().parents[3]
+# checkpoint=shipped: the small text model released with the repo (safetensors + JSON, see checkpoints/models)
+SHIPPED_MODEL = REPO_DIR / "checkpoints" / "models" / "bandai_mini_text_cpu.safetensors"
+RELEASE_SUFFIXES = (".safetensors", ".json")
 
 
 class UsageError(ValueError):
@@ -63,20 +66,27 @@ def to_dict(cfg: DictConfig | dict | None) -> dict | None:
 
 
 def find_checkpoint(spec: str, output_dir: str | Path) -> Path:
-    """A checkpoint path; 'latest': the newest last.ckpt of a training run under output_dir/train; 'best': the
-    best-FID checkpoint of that same newest run."""
+    """A checkpoint path: a .ckpt or a release (.safetensors/.json); 'shipped': the model released with the repo;
+    'latest': the newest last.ckpt of a training run under output_dir/train; 'best': that run's best-FID one."""
+    if spec == "shipped":
+        if not SHIPPED_MODEL.is_file():
+            raise UsageError(
+                f"the shipped model {SHIPPED_MODEL} is missing: restore it with `git checkout -- checkpoints`"
+            )
+        return SHIPPED_MODEL
     if spec not in ("latest", "best"):
         path = Path(spec)
         if not path.is_file():
             raise UsageError(
-                f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt>, checkpoint=latest or checkpoint=best"
+                f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt or .safetensors release>, "
+                "checkpoint=shipped, checkpoint=latest or checkpoint=best"
             )
         return path
     runs = sorted(Path(output_dir).glob("train*/**/checkpoints/last.ckpt"), key=lambda p: p.stat().st_mtime)
     if not runs:
         raise UsageError(
             f"no trained checkpoint under {output_dir}/train*: train one first (`make train` or `python train.py`) "
-            "or pass checkpoint=<path to a .ckpt>"
+            "pass checkpoint=<path to a .ckpt>, or use the released model: checkpoint=shipped"
         )
     if spec == "latest":
         return runs[-1]

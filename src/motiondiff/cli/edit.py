@@ -11,13 +11,14 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, find_checkpoint
-from motiondiff.cli.sample import check_text, load_module, slug
-from motiondiff.edit.api import EditResult, InputMotion, edit_parts, inbetween, load_input_motion, training_data_root
+from motiondiff.cli.sample import check_text, export_formats, load_module, slug
+from motiondiff.edit.api import EditResult, edit_parts, inbetween
+from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.eval.editing import edit_numbers
+from motiondiff.export.outputs import export_features
 
 KINDS = ("inbetween", "parts")
-RENDERS = ("mp4", "gif", "none")
 
 
 def edit_condition(cfg: DictConfig, module):
@@ -68,14 +69,13 @@ def _check(cfg: DictConfig, module) -> int | None:
         )
     if cfg.kind not in KINDS:
         raise UsageError(f"unknown kind {cfg.kind!r}; choose from {', '.join(KINDS)}")
-    if cfg.render not in RENDERS:
-        raise UsageError(f"unknown render {cfg.render!r}; choose from {', '.join(RENDERS)}")
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     return cfg.steps if cfg.steps is not None else cfg.sampler.steps
 
 
 def run(cfg: DictConfig) -> Path:
+    formats = export_formats(cfg)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
     steps = _check(cfg, module)
@@ -91,6 +91,7 @@ def run(cfg: DictConfig) -> Path:
                   f"(the model's maximum is {module.hparams.max_frames}; choose the window with start=/length=)")  # fmt: skip
         sampling = {"mode": cfg.mode, "num_samples": int(cfg.num_samples), "guidance": cfg.guidance,
                     "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta), "seed": int(cfg.seed),
+                    "resample": int(cfg.resample),
                     "progress": True}  # fmt: skip
         what = condition or "unconditioned"
         print(f"{cfg.kind} ({cfg.mode}) of {cfg.input} ({motion.num_frames} frames) x {cfg.num_samples}: {what!r}")
@@ -102,7 +103,7 @@ def run(cfg: DictConfig) -> Path:
     except EditError as err:
         raise UsageError(str(err)) from None
     out = Path(HydraConfig.get().runtime.output_dir)
-    rows = save_edits(out, result, motion, module, cfg.render, condition)
+    rows = save_edits(out, result, motion, module, formats, condition)
     summary = {
         "checkpoint": str(ckpt),
         "input": {"source": str(cfg.input), "clip_id": motion.clip_id, "split": motion.split, "label": motion.label,
@@ -121,14 +122,12 @@ def run(cfg: DictConfig) -> Path:
     return out
 
 
-def save_edits(out: Path, result: EditResult, motion: InputMotion, module, render: str, condition) -> list[dict]:
-    from motiondiff.export.render import render_motion
-
+def save_edits(out: Path, result: EditResult, motion: InputMotion, module, formats, condition) -> list[dict]:
+    """The input and each edit as arrays and the ``formats`` (export.outputs); one results row per edit."""
     fps = float(module.hparams.fps)
+    rep = module.representation
     title = f"{result.kind}: {condition or 'unconditioned'}"
-    input_video = None
-    if render != "none":
-        input_video = render_motion(motion.joints, result.skeleton, out / f"input.{render}", title="input", fps=fps)
+    inputs = export_features(out / "input", rep, motion.features, fps, formats, title="input")
     np.save(out / "keep_mask.npy", result.keep[0])
     rows = []
     for k in range(len(result)):
@@ -138,9 +137,8 @@ def save_edits(out: Path, result: EditResult, motion: InputMotion, module, rende
         np.save(files["joints"], result.joints[k])
         np.save(files["features"], result.features[k])
         np.save(files["input_joints"], result.input_joints[k])
-        video = None
-        if render != "none":
-            video = str(render_motion(result.joints[k], result.skeleton, f"{stem}.{render}", title=title, fps=fps))
-        rows.append({"index": k, **files, "video": video, "input_video": str(input_video) if input_video else None,
+        exports = export_features(stem, rep, result.features[k], fps, formats, title=title)
+        rows.append({"index": k, **files, "video": exports.get("mp4", exports.get("gif")), "exports": exports,
+                     "input_video": inputs.get("mp4", inputs.get("gif")), "input_exports": inputs,
                      **edit_numbers(result, k, fps)})  # fmt: skip
     return rows

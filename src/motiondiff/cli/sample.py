@@ -18,14 +18,16 @@ import torch
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.cli.common import UsageError, find_checkpoint, text_encoder_kwargs, to_dict
+from motiondiff.cli.common import RELEASE_SUFFIXES, UsageError, find_checkpoint, text_encoder_kwargs, to_dict
 from motiondiff.data.captions import measure
 from motiondiff.data.representation_spec import bridge_from_spec
 from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.eval.behaviour import mean_joint_speed
+from motiondiff.export.outputs import export_features, parse_formats
 from motiondiff.lit.diffusion import MotionDiffusionModule
+from motiondiff.release import load_release
 
 MAX_TEXT_CHARS = 1000  # far beyond any caption the encoders were trained on (CLIP keeps 77 tokens)
 # "<text>:<seconds>", seconds a positive decimal, optionally "4s"; a colon not followed by a number is text
@@ -33,6 +35,9 @@ TIMED = re.compile(r"^(?P<text>.*?)\s*:\s*(?P<seconds>[-+]?(?:\d+\.?\d*|\.\d+)(?
 
 
 def load_module(path: Path, device: str = "cpu") -> MotionDiffusionModule:
+    """A training checkpoint (.ckpt, loaded without running pickled code) or a release (.safetensors + .json)."""
+    if Path(path).suffix in RELEASE_SUFFIXES:
+        return load_release(path, device)
     module = MotionDiffusionModule.load_from_checkpoint(path, map_location=device, weights_only=True)
     return module.eval()
 
@@ -177,6 +182,7 @@ def run(cfg: DictConfig) -> Path:
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
+    formats = export_formats(cfg)
     module = load_module(ckpt, cfg.device)
     prompts = collect_prompts(plain, module)
     frames = num_frames(cfg, module) if seconds is None else None
@@ -194,7 +200,7 @@ def run(cfg: DictConfig) -> Path:
     generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance}
     if seconds is not None:
-        summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma))
+        summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats))
         (out / "results.json").write_text(json.dumps(summary, indent=1))
         print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
         return out
@@ -213,11 +219,19 @@ def run(cfg: DictConfig) -> Path:
             progress=True,
         )
         feats = module.denormalise(feats).cpu().numpy()
-        results += save_samples(out, prompt, feats, module, cfg.render, sigma)
+        results += save_samples(out, prompt, feats, module, formats, sigma)
     summary["samples"] = results
     (out / "results.json").write_text(json.dumps(summary, indent=1))
     print(f"\n{len(results)} sample(s) written to {out}")
     return out
+
+
+def export_formats(cfg: DictConfig) -> list[str]:
+    """The ``export=`` formats (mp4, gif, bvh, html; none), checked before anything is sampled."""
+    try:
+        return parse_formats(cfg.export if not isinstance(cfg.export, ListConfig) else list(cfg.export))
+    except ValueError as err:
+        raise UsageError(str(err)) from None
 
 
 def smoothing_sigma(cfg: DictConfig) -> float | None:
@@ -235,6 +249,8 @@ def long_motion_settings(cfg, module, prompts: list, seconds: list[float]) -> tu
         raise UsageError("timed prompts set their own lengths: drop frames= (length= is ignored too)")
     if cfg.edit_mode not in EDIT_MODES:
         raise UsageError(f"edit_mode must be one of {', '.join(EDIT_MODES)}, got {cfg.edit_mode!r}")
+    if isinstance(cfg.resample, bool) or not isinstance(cfg.resample, int) or cfg.resample < 1:
+        raise UsageError(f"resample is RePaint's repeats per step, a whole number >= 1 (1: none), got {cfg.resample!r}")
     fps, max_frames = module.hparams.fps, module.hparams.max_frames
     overlap, blend = cfg.overlap, cfg.blend
     if isinstance(overlap, bool) or not isinstance(overlap, int | float) or not 0 < overlap * fps < max_frames - 0.5:
@@ -251,7 +267,7 @@ def long_motion_settings(cfg, module, prompts: list, seconds: list[float]) -> tu
     return float(overlap), float(blend)
 
 
-def sample_long(cfg, out: Path, module, prompts: list, seconds: list[float], guidance, steps, generator, sigma):
+def sample_long(cfg, out, module, prompts: list, seconds: list[float], guidance, steps, generator, sigma, formats):
     """One long motion per sample through the timed prompts; returns the results.json entries."""
     overlap, blend = long_motion_settings(cfg, module, prompts, seconds)
     n = cfg.num_samples
@@ -260,12 +276,10 @@ def sample_long(cfg, out: Path, module, prompts: list, seconds: list[float], gui
     long = generate_long(
         module, segments, overlap_s=overlap, blend_s=blend, num_samples=n, guidance=guidance,
         sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta), generator=generator, mode=cfg.edit_mode,
-        labels=prompts, progress=True,
+        resample=int(cfg.resample), labels=prompts, progress=True,
     )  # fmt: skip
     title = ", ".join(f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True))
-    rows = save_samples(
-        out, title, long.features, module, cfg.render, sigma, stem=f"long_{slug(' then '.join(prompts))}"
-    )
+    rows = save_samples(out, title, long.features, module, formats, sigma, stem=f"long_{slug(' then '.join(prompts))}")
     seams, blends = [w.plan.start for w in long.windows[1:]], [w.plan.blend for w in long.windows[1:]]
     for row, joints, boundaries in zip(rows, long.joints, long.boundaries, strict=True):
         if sigma is not None:  # the filter also runs across the seams: how they look in the saved joints
@@ -285,15 +299,12 @@ def sample_long(cfg, out: Path, module, prompts: list, seconds: list[float], gui
 
 
 def save_samples(
-    out: Path, prompt: str | None, feats: np.ndarray, module, render: str, sigma: float | None = None, stem=None
+    out: Path, prompt: str | None, feats: np.ndarray, module, formats, sigma: float | None = None, stem=None
 ) -> list[dict]:
-    """Joints, features (and a video) per sample; with ``sigma`` the saved joints are the smoothed ones (the raw
-    ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after."""
-    from motiondiff.export.render import render_motion
-
+    """Joints, features and the ``formats`` (export.outputs) per sample; with ``sigma`` the saved joints are the
+    smoothed ones (the raw ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after."""
     rep = module.representation
     bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
-    skeleton = rep.skeleton
     fps = module.hparams.fps
     rows = []
     for k, f in enumerate(feats):
@@ -310,9 +321,8 @@ def save_samples(
                          "measured_on": "HumanML3D features of the joints, as evaluate.py"}  # fmt: skip
         np.save(f"{stem_k}_joints.npy", joints)
         np.save(f"{stem_k}_features.npy", f.astype(np.float32))
-        video = None
-        if render != "none":
-            video = render_motion(joints, skeleton, f"{stem_k}.{render}", title=prompt or "unconditioned", fps=fps)
+        exports = export_features(stem_k, rep, f, fps, formats, title=prompt or "unconditioned",
+                                  joints=joints if sigma is not None else None)  # fmt: skip
         facts = measure(feature_joints, fps)
         speed = mean_joint_speed(feature_joints, fps)
         rows.append(
@@ -320,7 +330,8 @@ def save_samples(
                 "prompt": prompt,
                 "index": k,
                 "joints": f"{stem_k}_joints.npy",
-                "video": str(video) if video else None,
+                "video": exports.get("mp4", exports.get("gif")),
+                "exports": exports,
                 "mean_joint_speed": speed,
                 **asdict(facts),
                 **({"smoothing": smoothing} if smoothing else {}),

@@ -4,7 +4,11 @@
 indices even when fewer steps are taken. Masks, conditions and guidance live in model_fn (see ``guidance.py``).
 ``x0_hook(x0_hat, t) -> x0_hat`` runs on every step's x̂0 (t the original step index, decreasing): editing overwrites
 the known part there (MDM). ``xt_hook(x_prev, t_prev) -> x_prev`` runs on every step's result, t_prev the original
-index of x_prev's noise level or -1 for the clean result: RePaint-style editing re-noises the known part there. No host sync inside the loops: per-step scalars come from float64 tables read once up front.
+index of x_prev's noise level or -1 for the clean result: RePaint-style editing re-noises the known part there.
+``resample=U > 1`` (RePaint, Lugmayr et al. 2022, jump length 1) takes every step U times: after each of the first
+U − 1 tries, x_{t_prev} is noised back to x_t by q(x_t | x_{t_prev}) and the step is taken again, giving the model U
+looks at the hooked result so the generated part can agree with the known one. It costs U model calls per step.
+No host sync inside the loops: per-step scalars come from float64 tables read once up front.
 """
 
 from __future__ import annotations
@@ -51,6 +55,21 @@ def _initial_noise(
     return torch.randn(tuple(shape), generator=generator, device=device, dtype=dtype or torch.float32)
 
 
+def _check_resample(resample: int) -> int:
+    if int(resample) != resample or resample < 1:
+        raise ValueError(f"resample must be a whole number >= 1 (1: no resampling), got {resample}")
+    return int(resample)
+
+
+def renoise_step(
+    x_prev: torch.Tensor, alpha_bar: float, alpha_bar_prev: float, generator: torch.Generator | None
+) -> torch.Tensor:
+    """x_t ~ q(x_t | x_prev) = N(√(ᾱ_t/ᾱ_prev) x_prev, (1 − ᾱ_t/ᾱ_prev) I): one step back up the chain (RePaint)."""
+    ratio = alpha_bar / alpha_bar_prev
+    z = torch.randn(x_prev.shape, generator=generator, device=x_prev.device, dtype=x_prev.dtype)
+    return math.sqrt(ratio) * x_prev + math.sqrt(1.0 - ratio) * z
+
+
 def _predict_x0(
     diffusion: GaussianDiffusion,
     model_fn: ModelFn,
@@ -80,6 +99,7 @@ def ddpm_sample(
     clip_x0: float | None = None,
     progress: bool = False,
     steps: int | None = None,
+    resample: int = 1,
     device: torch.device | str | None = None,
     dtype: torch.dtype | None = None,
 ) -> torch.Tensor:
@@ -89,21 +109,27 @@ def ddpm_sample(
     ``noise`` is x_T (else drawn from ``generator``); the last step adds no noise, so the result is the last x̂0.
     """
     kept = select_timesteps(diffusion.num_steps, steps)
+    resample = _check_resample(resample)
     proc = diffusion if len(kept) == diffusion.num_steps else diffusion.respace(kept)
+    alpha_bar = proc.alphas_cumprod.tolist()  # indexed like t_proc
     x = _initial_noise(shape, noise, generator, device, dtype)
     batch = x.shape[0]
     for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDPM", disable=not progress, leave=False):
         t_model = torch.full((batch,), kept[i], dtype=torch.long, device=x.device)
         t_proc = t_model if proc is diffusion else torch.full((batch,), i, dtype=torch.long, device=x.device)
-        x0 = _predict_x0(proc, model_fn, x, t_model, t_proc, clip_x0, x0_hook, kept[i])
-        mean, _, log_var = proc.q_posterior(x0, x, t_proc)
-        if i == 0:
-            x = mean
-        else:
-            z = torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
-            x = mean + (0.5 * log_var).exp() * z
-        if xt_hook is not None:
-            x = xt_hook(x, kept[i - 1] if i > 0 else -1)
+        i_proc = kept[i] if proc is diffusion else i
+        for u in range(resample if i > 0 else 1):
+            if u > 0:
+                x = renoise_step(x, alpha_bar[i_proc], alpha_bar[i_proc - 1], generator)
+            x0 = _predict_x0(proc, model_fn, x, t_model, t_proc, clip_x0, x0_hook, kept[i])
+            mean, _, log_var = proc.q_posterior(x0, x, t_proc)
+            if i == 0:
+                x = mean
+            else:
+                z = torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
+                x = mean + (0.5 * log_var).exp() * z
+            if xt_hook is not None:
+                x = xt_hook(x, kept[i - 1] if i > 0 else -1)
     return x
 
 
@@ -133,6 +159,7 @@ def ddim_sample(
     xt_hook: XtHook | None = None,
     clip_x0: float | None = None,
     progress: bool = False,
+    resample: int = 1,
     device: torch.device | str | None = None,
     dtype: torch.dtype | None = None,
 ) -> torch.Tensor:
@@ -142,17 +169,21 @@ def ddim_sample(
     The step from t = 0 goes to ᾱ_prev = 1, i.e. returns x̂0.
     """
     kept = select_timesteps(diffusion.num_steps, steps)
+    resample = _check_resample(resample)
     alpha_bar = diffusion.alphas_cumprod.tolist()
     x = _initial_noise(shape, noise, generator, device, dtype)
     batch = x.shape[0]
     for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDIM", disable=not progress, leave=False):
         t = torch.full((batch,), kept[i], dtype=torch.long, device=x.device)
-        x0 = _predict_x0(diffusion, model_fn, x, t, t, clip_x0, x0_hook, kept[i])
-        eps = diffusion.eps_from_x0(x0, x, t)
         c_x0, c_eps, sigma = ddim_coefficients(alpha_bar[kept[i]], alpha_bar[kept[i - 1]] if i > 0 else 1.0, eta)
-        x = c_x0 * x0 + c_eps * eps
-        if sigma > 0:
-            x = x + sigma * torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
-        if xt_hook is not None:
-            x = xt_hook(x, kept[i - 1] if i > 0 else -1)
+        for u in range(resample if i > 0 else 1):
+            if u > 0:
+                x = renoise_step(x, alpha_bar[kept[i]], alpha_bar[kept[i - 1]], generator)
+            x0 = _predict_x0(diffusion, model_fn, x, t, t, clip_x0, x0_hook, kept[i])
+            eps = diffusion.eps_from_x0(x0, x, t)
+            x = c_x0 * x0 + c_eps * eps
+            if sigma > 0:
+                x = x + sigma * torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
+            if xt_hook is not None:
+                x = xt_hook(x, kept[i - 1] if i > 0 else -1)
     return x

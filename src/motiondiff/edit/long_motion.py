@@ -38,7 +38,7 @@ import numpy as np
 import torch
 
 from motiondiff.edit.canonical import from_canonical, placement, to_canonical
-from motiondiff.edit.inpaint import EDIT_MODES, EditMode, inpaint
+from motiondiff.edit.inpaint import SamplingOptions, inpaint
 
 
 @dataclass(frozen=True)
@@ -135,23 +135,20 @@ def generate_long(
     overlap_s: float = 1.0,
     blend_s: float = 0.25,
     num_samples: int = 1,
-    guidance: float | None = None,
-    sampler: str = "ddim",
-    steps: int | None = 50,
-    eta: float = 0.0,
     generator: torch.Generator | None = None,
-    mode: EditMode = "overwrite",
     labels: Sequence[str | None] | None = None,
     progress: bool = False,
+    **sampling: Any,
 ) -> LongMotion:
     """``segments``: (condition, seconds) in order; a condition is what ``module.sample`` takes for a batch of
     ``num_samples`` (text features, action ids, or None). ``blend_s``: seconds at the end of each overlap that are
     cross-faded instead of held (0: hold all; 0.25 s took the largest seam step of the shipped cpu model from 3.0x
-    to 2.3x its median step). Returns ``num_samples`` long motions of Σ round(seconds · fps) frames each."""
+    to 2.3x its median step). ``sampling``: the options of ``SamplingOptions`` (mode, guidance, sampler, steps,
+    eta, resample). Returns ``num_samples`` long motions of Σ round(seconds · fps) frames each."""
     if not segments:
         raise ValueError("give at least one (condition, seconds) segment")
-    if mode not in EDIT_MODES:
-        raise ValueError(f"unknown edit mode {mode!r}; choose from {', '.join(EDIT_MODES)}")
+    conditioned = any(cond is not None for cond, _ in segments)
+    options = SamplingOptions.from_kwargs(sampling).resolved(module, conditioned=conditioned)
     fps, max_frames = float(module.hparams.fps), int(module.hparams.max_frames)
     if not overlap_s > 0:
         raise ValueError(f"overlap must be positive seconds (the frames a segment continues from), got {overlap_s}")
@@ -167,18 +164,18 @@ def generate_long(
 
     rep = module.representation
     mean, std = (t.detach().cpu().double().numpy() for t in (module.mean, module.std))
-    guidance = module.default_guidance if guidance is None else float(guidance)
-    sampling = {"guidance": guidance, "sampler": sampler, "steps": steps, "eta": eta, "progress": progress}
+    mode, kwargs = options.mode, {**options.inpaint_kwargs(), "progress": progress}
+    del kwargs["mode"]
     motion = np.zeros((num_samples, 0, module.hparams.feature_dim))
     windows = []
     for plan in plans:
         cond = segments[plan.segment][0]
         if plan.overlap == 0:
             lengths = torch.full((num_samples,), plan.length)
-            out = module.sample(cond, lengths, generator=generator, **sampling)
+            out = module.sample(cond, lengths, generator=generator, **kwargs)
             window = Window(plan, _denormalise(out, mean, std), np.zeros(num_samples), np.zeros((num_samples, 3)))
         else:
-            window = _continue(module, motion, plan, cond, mean, std, mode=mode, generator=generator, **sampling)
+            window = _continue(module, motion, plan, cond, mean, std, mode=mode, generator=generator, **kwargs)
         windows.append(window)
         placed = from_canonical(rep, window.features, window.yaw, window.offset)
         # the blended frames replace the motion's last ones (hml: rows before them decode unchanged)

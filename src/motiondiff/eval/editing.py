@@ -1,8 +1,8 @@
 """Does editing keep what it should and change what it should? Measurements on real test clips.
 
     python -m motiondiff.eval.editing [checkpoint=latest] [num_edits=20] [num_part_edits=10] [split=test]
-        [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [seed=0] [data=<prepared folder>]
-        [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
+        [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [seed=0]
+        [data=<prepared folder>] [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
 
 (a) In-betweening of ``num_edits`` clips of the split (first and last 25% kept, each clip's own caption or action as
     the condition): the largest decoded error on the kept frames (m), and per boundary the joint-speed jump
@@ -110,7 +110,7 @@ def _raise_condition(module, text: str):
 
 def walking_clips(module, split: str, count: int, data_root=None) -> list:
     """``count`` clips whose label or a caption contains "walk": from ``split`` first, then the other splits."""
-    from motiondiff.edit.api import dataset_motions
+    from motiondiff.edit.inputs import dataset_motions
 
     found = []
     for name in dict.fromkeys([split, "val", "train"]):
@@ -124,9 +124,10 @@ def walking_clips(module, split: str, count: int, data_root=None) -> list:
 
 def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, modes=("overwrite", "repaint"),
                      text=DEFAULT_TEXT, parts="lower_body", data_root=None, seed=0, **sampling) -> dict:  # fmt: skip
-    """The numbers of the module docstring, per mode. ``sampling``: sampler, steps, eta, guidance."""
+    """The numbers of the module docstring, per mode. ``sampling``: sampler, steps, eta, guidance, resample."""
     from motiondiff.data.representation_spec import bridge_from_spec
-    from motiondiff.edit.api import dataset_motions, edit_parts, inbetween
+    from motiondiff.edit.api import edit_parts, inbetween
+    from motiondiff.edit.inputs import dataset_motions
 
     fps = float(module.hparams.fps)
     bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
@@ -178,6 +179,12 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
     return report
 
 
+def markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
+    """Lines of a Markdown table, the first column left-aligned and the numbers right-aligned."""
+    lines = ["| " + " | ".join(header) + " |", "|---|" + "---:|" * (len(header) - 1)]
+    return lines + ["| " + " | ".join(row) + " |" for row in rows]
+
+
 def format_report(report: dict, checkpoint: str = "") -> str:
     s = report["sampling"]
     ib0 = next(iter(report["modes"].values()))["inbetween"]
@@ -185,24 +192,27 @@ def format_report(report: dict, checkpoint: str = "") -> str:
         "# Motion editing on real clips",
         "",
         f"Checkpoint: `{checkpoint}`  ",
-        f"Sampler: {s.get('sampler')} (steps {s.get('steps')}, eta {s.get('eta', 0.0)}), guidance "
-        f"{s.get('guidance') if s.get('guidance') is not None else 'model default'}, seed {report['seed']}",
+        f"Sampler: {s.get('sampler')} (steps {s.get('steps')}, eta {s.get('eta', 0.0)}, resample "
+        f"{s.get('resample', 1)}), guidance {s.get('guidance') if s.get('guidance') is not None else 'model default'}, "
+        f"seed {report['seed']}",
         "",
         f"## (a) In-betweening: {ib0['edits']} {report['split']} clips, first and last 25% kept",
         "",
         f"Conditioned on {ib0['conditioned_on']}. Ratio = speed of the step across a boundary / max(median step "
         f"speed of the generated middle, {SPEED_FLOOR} m/s); step speed = mean joint displacement x fps.",
         "",
-        "| Mode | Max kept-frame error (m) | Max boundary ratio | Median ratio | Share of boundaries <= 3 |",
-        "|---|---:|---:|---:|---:|",
     ]
+    rows = []
     for mode, r in report["modes"].items():
         a = r["inbetween"]
-        lines.append(f"| {mode} | {a['max_kept_error_m']:.2e} | {a['max_boundary_ratio']:.2f} | "
-                     f"{a['median_boundary_ratio']:.2f} | {a['share_ratio_le_3']:.0%} |")  # fmt: skip
+        rows.append([mode, f"{a['max_kept_error_m']:.2e}", f"{a['max_boundary_ratio']:.2f}",
+                     f"{a['median_boundary_ratio']:.2f}", f"{a['share_ratio_le_3']:.0%}"])  # fmt: skip
     real = report["inputs_boundary_ratio"]
-    lines.append(f"| unedited clips (reference) | – | {real['max']:.2f} | {real['median']:.2f} | "
-                 f"{real['share_le_3']:.0%} |")  # fmt: skip
+    rows.append(["unedited clips (reference)", "–", f"{real['max']:.2f}", f"{real['median']:.2f}",
+                 f"{real['share_le_3']:.0%}"])  # fmt: skip
+    lines += markdown_table(
+        ["Mode", "Max kept-frame error (m)", "Max boundary ratio", "Median ratio", "Share of boundaries <= 3"], rows
+    )
     n = len(report["parts_clips"])
     lines += [
         "",
@@ -211,20 +221,23 @@ def format_report(report: dict, checkpoint: str = "") -> str:
         f"Wrists up = both wrists above the head for >= {WRISTS_UP_SHARE:.0%} of the frames (feature skeleton). "
         f"Unedited inputs with wrists up: {report['inputs_wrists_up']} of {n}.",
         "",
-        "| Mode | Max root-relative kept-joint error (m) | Max world kept-joint error (m) | Edits with wrists up |",
-        "|---|---:|---:|---:|",
     ]
+    rows = []
     for mode, r in report["modes"].items():
         b = r["parts"]
-        lines.append(f"| {mode} | {b['max_root_relative_kept_error_m']:.2e} | {b['max_kept_error_m']:.2e} | "
-                     f"{b['wrists_up_edits']} of {b['edits']} |")  # fmt: skip
+        rows.append([mode, f"{b['max_root_relative_kept_error_m']:.2e}", f"{b['max_kept_error_m']:.2e}",
+                     f"{b['wrists_up_edits']} of {b['edits']}"])  # fmt: skip
+    lines += markdown_table(
+        ["Mode", "Max root-relative kept-joint error (m)", "Max world kept-joint error (m)", "Edits with wrists up"],
+        rows,
+    )
     lines += ["", "Clips: in-betweening " + ", ".join(report["inbetween_clips"]),
               "", "Walking clips: " + ", ".join(report["parts_clips"]), ""]  # fmt: skip
     return "\n".join(lines)
 
 
 KEYS = ("checkpoint", "num_edits", "num_part_edits", "split", "modes", "sampler", "steps", "eta", "guidance", "seed",
-        "data", "text", "parts", "out", "device")  # fmt: skip
+        "data", "text", "parts", "out", "device", "resample")  # fmt: skip
 
 
 def main(argv: list[str]) -> Path:
@@ -242,7 +255,8 @@ def main(argv: list[str]) -> Path:
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
     ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
     module = load_module(ckpt, args.get("device", "cpu"))
-    sampling = {"sampler": args.get("sampler", "ddim"), "eta": float(args.get("eta", 0.0))}
+    sampling = {"sampler": args.get("sampler", "ddim"), "eta": float(args.get("eta", 0.0)),
+                "resample": int(args.get("resample", 1))}  # fmt: skip
     steps = args.get("steps", "50")
     sampling["steps"] = None if steps in ("null", "None") else int(steps)  # null: every step of the sampler
     if "guidance" in args:
@@ -250,7 +264,8 @@ def main(argv: list[str]) -> Path:
     try:
         report = evaluate_editing(
             module, split=args.get("split", "test"), num_edits=int(args.get("num_edits", 20)),
-            num_part_edits=int(args.get("num_part_edits", 10)), modes=tuple(args.get("modes", "overwrite,repaint").split(",")),
+            num_part_edits=int(args.get("num_part_edits", 10)),
+            modes=tuple(args.get("modes", "overwrite,repaint").split(",")),
             text=args.get("text", DEFAULT_TEXT), parts=args.get("parts", "lower_body"), data_root=args.get("data"),
             seed=int(args.get("seed", 0)), **sampling,
         )  # fmt: skip

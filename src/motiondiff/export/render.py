@@ -25,29 +25,18 @@ def _chain_color(chain: tuple[int, ...], skeleton: Skeleton) -> str:
     return _COLORS["torso"]
 
 
-def render_motion(
-    joints: np.ndarray, skeleton: Skeleton, path: str | Path, title: str = "", fps: float = 20.0, dpi: int = 80
-) -> Path:
-    """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif)."""
-    import logging
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    logging.getLogger("matplotlib.animation").setLevel(logging.WARNING)  # it logs every save at INFO
+def stick_figure_animation(
+    joints: np.ndarray, skeleton: Skeleton, title: str = "", fps: float = 20.0, dpi: int = 80, step: int = 1
+):
+    """A matplotlib FuncAnimation of (N, J, 3) joints (metres, y up): every ``step``-th frame, ground grid, root
+    trail. Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``; close its figure when done
+    (``plt.close(anim._fig)``)."""
     import matplotlib.pyplot as plt
     from matplotlib import animation
 
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in (".mp4", ".gif"):
-        raise ValueError(f"cannot render to {path.name}: use a .mp4 or .gif file name")
     joints = np.asarray(joints, dtype=np.float64)
     if joints.ndim != 3 or joints.shape[1:] != (skeleton.num_joints, 3):
         raise ValueError(f"expected joints (frames, {skeleton.num_joints}, 3), got {joints.shape}")
-    if not path.parent.is_dir():
-        raise NotADirectoryError(f"cannot write {path}: the folder {path.parent} does not exist")
-
     fig = plt.figure(figsize=(4, 4), dpi=dpi)
     ax = fig.add_subplot(projection="3d")
     trail = joints[:, 0, [0, 2]]
@@ -76,11 +65,33 @@ def render_motion(
             ax.plot(frame[list(chain), 0], frame[list(chain), 2], frame[list(chain), 1], color=color, lw=2.5)
         return []
 
-    anim = animation.FuncAnimation(fig, draw, frames=len(joints), interval=1000 / fps)
+    frames = range(0, len(joints), max(1, int(step)))
+    return animation.FuncAnimation(fig, draw, frames=frames, interval=1000 * max(1, int(step)) / fps)
+
+
+def render_motion(
+    joints: np.ndarray, skeleton: Skeleton, path: str | Path, title: str = "", fps: float = 20.0, dpi: int = 80
+) -> Path:
+    """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif)."""
+    import logging
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    logging.getLogger("matplotlib.animation").setLevel(logging.WARNING)  # it logs every save at INFO
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".mp4", ".gif"):
+        raise ValueError(f"cannot render to {path.name}: use a .mp4 or .gif file name")
+    if not path.parent.is_dir():
+        raise NotADirectoryError(f"cannot write {path}: the folder {path.parent} does not exist")
+    anim = stick_figure_animation(joints, skeleton, title, fps, dpi)
     try:
         atomic_write(path, lambda tmp: anim.save(tmp, writer=_writer(suffix, fps), dpi=dpi), suffix=suffix)
     finally:
-        plt.close(fig)
+        plt.close(anim._fig)
     return path
 
 

@@ -174,8 +174,10 @@ class MotionDiffusionModule(L.LightningModule):
         progress: bool = False,
         x0_hook=None,
         xt_hook=None,
+        resample: int = 1,
     ) -> torch.Tensor:
-        """Generate normalised features (B, max(lengths), D); frames past each length are padding."""
+        """Generate normalised features (B, max(lengths), D); frames past each length are padding. ``resample``:
+        RePaint's repeats per step for editing (see ``diffusion.samplers``)."""
         self.eval()
         b, n = len(lengths), int(lengths.max())
         mask = torch.arange(n, device=self.device)[None] < lengths.to(self.device)[:, None]
@@ -190,12 +192,12 @@ class MotionDiffusionModule(L.LightningModule):
         if sampler == "ddim":
             return ddim_sample(
                 self.diffusion, fn, shape, steps=steps or 50, eta=eta, generator=generator,
-                x0_hook=x0_hook, xt_hook=xt_hook, progress=progress, device=self.device,
+                x0_hook=x0_hook, xt_hook=xt_hook, progress=progress, resample=resample, device=self.device,
             )  # fmt: skip
         if sampler == "ddpm":
             return ddpm_sample(
                 self.diffusion, fn, shape, steps=steps, generator=generator, x0_hook=x0_hook, xt_hook=xt_hook,
-                progress=progress, device=self.device,
+                progress=progress, resample=resample, device=self.device,
             )  # fmt: skip
         raise ValueError(f"unknown sampler {sampler!r}; choose ddpm or ddim")
 

@@ -1,0 +1,320 @@
+"""The motion to edit, in the model's representation: from a BVH file, a joints .npy or a dataset clip.
+
+Input motions are encoded exactly as the model's training data was (same joint map, 20 fps, canonical placement,
+same representation), so an edit starts from what the model knows how to continue.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from omegaconf import OmegaConf
+
+from motiondiff.data.clip import ClipMotion
+from motiondiff.data.datamodules import embedded_data_root
+from motiondiff.data.features import canonicalize_joints, ground_and_face, skeleton_for_dim
+from motiondiff.data.representations import Representation
+from motiondiff.edit.canonical import carries_placement, placement, to_canonical
+from motiondiff.edit.masks import EditError
+from motiondiff.skeleton import Skeleton, get_skeleton
+
+REPO_DIR = embedded_data_root().parents[1]
+MIN_INPUT_FRAMES = 4  # at least a kept frame on each side of a gap and something to generate
+SPLIT_ORDER = ("test", "val", "train")  # where a bare clip id is looked up, in this order
+
+
+@dataclass
+class InputMotion:
+    """A motion to edit, in the model's representation.
+
+    features  (N, D) de-normalised features (the window of the input that is edited)
+    joints    (N, J, 3) the features decoded: the input as the model's representation sees it (its skeleton)
+    """
+
+    features: np.ndarray
+    joints: np.ndarray
+    source: str
+    fps: float
+    window: tuple[int, int]  # input frames [start, stop) that were encoded (the model has a maximum length)
+    total_frames: int  # frames of the whole input (at the model's fps)
+    clip_id: str | None = None
+    split: str | None = None
+    label: str | None = None  # the dataset's content label (action models are conditioned on these)
+    captions: list[str] = field(default_factory=list)
+
+    @property
+    def num_frames(self) -> int:
+        return len(self.features)
+
+
+def load_input_motion(
+    source: str | os.PathLike,
+    module,
+    *,
+    data_root: str | os.PathLike | None = None,
+    start: int = 0,
+    frames: int | None = None,
+) -> InputMotion:
+    """The motion to edit, encoded in the model's representation.
+
+    ``source``: a ``.bvh`` file (prepared like the dataset: joint map to SMPL-22, 20 fps, canonical placement, rig
+    rotations for rotation representations), a ``.npy`` of joints (frames, J, 3) in metres, y up, at the model's
+    fps on the representation's skeleton (hml263/kit251/jp only), or a dataset clip id, ``split:clip_id`` or a
+    bare id looked up in ``data_root`` (default: the data the model was trained on).
+
+    ``start``/``frames``: the window to edit, from input frame ``start``, ``frames`` edited frames (default: as many
+    as the model's maximum length allows). A file's window is cut before it is prepared, as `prepare` cuts long
+    clips, so it starts at the origin facing +Z like every training clip.
+    """
+    text = str(source)
+    path = Path(text)
+    if path.suffix.lower() in (".bvh", ".npy"):
+        if path.is_dir() or not path.is_file():
+            raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path")
+        load = _bvh_features if path.suffix.lower() == ".bvh" else _npy_features
+        features, window, total = load(path, module, start, frames)
+        return _input_motion(module, features, text, window, total, {})
+    features, info = _dataset_features(text, module, data_root)
+    return _dataset_window(module, features, text, start, frames, info)
+
+
+def _input_motion(module, features, source: str, window, total: int, info: dict) -> InputMotion:
+    rep: Representation = module.representation
+    features = np.asarray(features, dtype=np.float32)
+    joints = rep.decode_numpy(features).astype(np.float32)
+    return InputMotion(features, joints, source, float(module.hparams.fps), window, total, **info)
+
+
+def _dataset_window(module, features: np.ndarray, source: str, start: int, frames: int | None, info: dict):
+    """A window of an encoded dataset clip; one that starts later is turned and moved so its first frame stands at
+    the origin facing +Z (hml features carry no placement and need nothing)."""
+    rep: Representation = module.representation
+    total = len(features) + rep.frames_dropped
+    window = frame_window(total, rep.frames_dropped, start, frames, int(module.hparams.max_frames), source)
+    rows = np.asarray(features[window[0] : window[1] - rep.frames_dropped], dtype=np.float64)
+    if window[0] > 0 and carries_placement(rep):
+        rows = to_canonical(rep, rows, *placement(rep, rows, 0))
+    return _input_motion(module, rows, source, window, total, info)
+
+
+def dataset_motions(module, split: str = "test", data_root=None, frames: int | None = None) -> list[InputMotion]:
+    """Every clip of a prepared dataset's split (default: the model's training data) with at least
+    MIN_INPUT_FRAMES frames, as input motions (each cut to the model's maximum length, or ``frames``)."""
+    from motiondiff.data.prepared import load_split
+
+    root = Path(data_root) if data_root is not None else training_data_root(module)
+    if root is None or not (root / "meta.json").is_file():
+        raise EditError(f"no prepared dataset at {root}; pass data_root=<a folder made by motiondiff.data.prepare>")
+    data = load_split(root, split)
+    motions = []
+    for i in range(data.num_clips):
+        feats = _encode_prepared(data, i, module, root)
+        if len(feats) < MIN_INPUT_FRAMES:
+            continue
+        clip_id = str(data.arrays["ids"][i])
+        info = {"clip_id": clip_id, "split": split, "label": data.label("content", i), "captions": data.captions(i)}
+        n = None if frames is None else min(frames, len(feats))
+        motions.append(_dataset_window(module, feats, f"{split}:{clip_id}", 0, n, info))
+    return motions
+
+
+def frame_window(total: int, dropped: int, start: int, frames: int | None, max_rows: int, source: str):
+    """Input frames [start, stop) that encode to ``frames`` feature rows (default: as many as fit, at most
+    ``max_rows``, the model's maximum); a representation drops ``dropped`` frames (hml: 1, the last velocity)."""
+    if not 0 <= start < total:
+        raise EditError(f"start={start} is outside the input {source!r}, which has {total} frames")
+    available = total - start - dropped
+    rows = min(available, max_rows) if frames is None else int(frames)
+    if rows > max_rows:
+        raise EditError(f"{rows} frames is longer than this model's maximum of {max_rows}; edit a shorter window")
+    if rows < MIN_INPUT_FRAMES or rows > available:
+        raise EditError(
+            f"the input {source!r} has {total} frames: {rows} frames from frame {start} do not fit "
+            f"(at least {MIN_INPUT_FRAMES} frames are needed)"
+        )
+    return start, start + rows + dropped
+
+
+def feature_skeleton(module) -> Skeleton:
+    """The skeleton the model's dataset measured joints on (SMPL-22 or KIT-21)."""
+    spec = module.hparams.get("representation")
+    return get_skeleton(spec["feature_skeleton"]) if spec else skeleton_for_dim(int(module.hparams.feature_dim))
+
+
+def _uses_rig(rep: Representation) -> bool:
+    return rep.needs_rotations or bool(getattr(rep, "uses_rig", False))
+
+
+def _npy_features(path: Path, module, start: int, frames: int | None):
+    rep: Representation = module.representation
+    if _uses_rig(rep) and rep.name != "jp":
+        raise EditError(
+            f"this model's representation {rep.name} needs joint rotations, which a .npy of joint positions does "
+            "not have; give a .bvh file or a dataset clip id"
+        )
+    try:
+        joints = np.load(path, allow_pickle=False)
+    except (ValueError, OSError) as err:
+        raise EditError(f"{path}: not a readable .npy array ({err})") from None
+    skel = rep.skeleton
+    if joints.ndim != 3 or joints.shape[1:] != (skel.num_joints, 3):
+        raise EditError(
+            f"{path}: joints of shape {joints.shape}, but this model ({rep.name}) reads (frames, {skel.num_joints}, "
+            f"3) joints of its {skel.name} skeleton, metres, y up, at {module.hparams.fps:g} fps; joint order: "
+            + ", ".join(skel.joint_names)
+        )
+    if not np.isfinite(joints).all():
+        raise EditError(f"{path}: joint positions contain NaN or Inf")
+    window = frame_window(len(joints), rep.frames_dropped, start, frames, int(module.hparams.max_frames), str(path))
+    part = joints[window[0] : window[1]].astype(np.float64)
+    if rep.name == "jp" and _uses_rig(rep):  # rig joints: the native skeleton's placement rule, its own bones
+        placed = place_like_dataset(part, skel)
+        return placed.reshape(len(placed), -1), window, len(joints)
+    canonical = canonicalize_joints(part, skel).astype(np.float32)  # as the dataset did (uniform skeleton)
+    return rep.encode(ClipMotion(joints=canonical)), window, len(joints)
+
+
+def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
+    """Rig joints moved rigidly as `prepare` placed the native skeleton: lowest joint on the floor, frame 0's root
+    at the x/z origin facing +Z (as given when the skeleton has no facing joints)."""
+    from motiondiff.rotations import qrot
+
+    if skeleton.face_joints is None:
+        return joints
+    turn, shift = ground_and_face(joints, skeleton)
+    return qrot(np.broadcast_to(turn, joints.shape[:-1] + (4,)), joints + shift)
+
+
+def _bvh_features(path: Path, module, start: int, frames: int | None):
+    """Features of a window of a BVH file, prepared exactly as `prepare` prepares a clip cut to a window."""
+    from motiondiff.data.bvh import BVHError, read_bvh
+    from motiondiff.data.processing import TARGET_FPS, ClipError, process_motion
+
+    rep: Representation = module.representation
+    target = feature_skeleton(module)
+    if target.name != "smpl22":
+        raise EditError(
+            f"BVH input is mapped to SMPL-22, but this model's dataset uses the {target.name} skeleton; give a .npy "
+            f"of its joints instead"
+        )
+    if float(module.hparams.fps) != TARGET_FPS:
+        raise EditError(f"BVH input is prepared at {TARGET_FPS:g} fps, but this model runs at {module.hparams.fps} fps")
+    try:
+        motion = read_bvh(path)
+    except BVHError as err:
+        raise EditError(str(err)) from None
+    joint_map = _bvh_joint_map(module, motion, path)
+    try:
+        clip = process_motion(motion, joint_map)
+        total = len(clip.joints)
+        window = frame_window(total, rep.frames_dropped, start, frames, int(module.hparams.max_frames), str(path))
+        if window != (0, total):
+            clip = process_motion(motion, joint_map, window=window)
+    except ClipError as err:
+        raise EditError(f"{path}: {err}") from None
+    if not _uses_rig(rep):
+        return rep.encode(ClipMotion(joints=clip.joints)), window, total
+    rig = rep.skeleton
+    if tuple(clip.native.joint_names) != tuple(rig.joint_names) or tuple(clip.native.parents) != tuple(rig.parents):
+        raise EditError(
+            f"{path}: its skeleton ({len(clip.native.joint_names)} joints: {', '.join(clip.native.joint_names[:6])}, "
+            f"...) is not this model's rig ({rig.num_joints} joints: {', '.join(rig.joint_names[:6])}, ...); "
+            f"{rep.name} needs the same rig: use a model with hml263 features or a BVH of the training skeleton"
+        )
+    offsets = clip.native.offsets.astype(np.float64)
+    return rep.encode(ClipMotion(clip.joints, clip.native_rotations, clip.native_root, offsets, rig)), window, total
+
+
+def _bvh_joint_map(module, motion, path: Path):
+    """The joint map the model's dataset was prepared with when the file has its joints, else one inferred from
+    the joint names (as `prepare bvh --joint-map auto`)."""
+    from motiondiff.data.joint_map import JointMap
+
+    spec = module.hparams.get("representation") or {}
+    if spec.get("joint_map"):
+        known = JointMap(**spec["joint_map"])
+        if known.source_joints() <= set(motion.joint_names):
+            return known
+    try:
+        return JointMap.infer(motion.joint_names, motion.parents, offsets=motion.offsets, source=f"auto({path.name})")
+    except ValueError as err:
+        raise EditError(f"{path}: cannot map its joints to SMPL-22: {err}") from None
+
+
+def training_data_root(module, data_dir: str | os.PathLike | None = None, cache_dir=None) -> Path | None:
+    """Where the model's training dataset lives: the ``root`` of conf/dataset/<name>.yaml (the ``bvh`` dataset's
+    prepared cache), resolved with ``data_dir``/``cache_dir`` (default: $MOTIONDIFF_DATA_DIR or the checkout's
+    data/, $MOTIONDIFF_CACHE_DIR or .cache/motiondiff). None when the checkpoint names no dataset."""
+    name = module.hparams.get("dataset") or ""
+    if not name:
+        return None
+    data_dir = Path(data_dir or os.environ.get("MOTIONDIFF_DATA_DIR", REPO_DIR / "data"))
+    cache_dir = Path(cache_dir or os.environ.get("MOTIONDIFF_CACHE_DIR", REPO_DIR / ".cache" / "motiondiff"))
+    conf = REPO_DIR / "conf" / "dataset" / f"{name}.yaml"
+    if not conf.is_file():
+        return data_dir / name
+    cfg = OmegaConf.merge(
+        {"paths": {"data_dir": str(data_dir), "cache_dir": str(cache_dir)}}, {"dataset": OmegaConf.load(conf)}
+    )
+    return Path(cfg.dataset.datamodule.cache if name == "bvh" else cfg.dataset.root)
+
+
+def _dataset_features(spec: str, module, data_root) -> tuple[np.ndarray, dict]:
+    split, _, clip_id = spec.rpartition(":")
+    root = Path(data_root) if data_root is not None else training_data_root(module)
+    if root is None or not root.is_dir():
+        raise EditError(
+            f"input {spec!r} is not a .bvh or .npy file, and there is no dataset to look it up as a clip id in "
+            f"({root or 'the checkpoint names no dataset'}); pass a file, or the dataset folder with data=<folder>"
+        )
+    if (root / "meta.json").is_file():
+        return _prepared_clip(root, split, clip_id, module)
+    official = root / "new_joint_vecs" / f"{clip_id}.npy"
+    if official.is_file() and module.representation.name in ("hml263", "kit251"):
+        return np.load(official).astype(np.float32), {"clip_id": clip_id, "captions": _official_captions(root, clip_id)}
+    raise EditError(
+        f"no clip {clip_id!r} in {root}: clip ids are looked up in a prepared dataset (meta.json, <split>.npz) or "
+        "an official HumanML3D/KIT-ML folder (new_joint_vecs/<id>.npy); check the id or pass a .bvh/.npy file"
+    )
+
+
+def _official_captions(root: Path, clip_id: str) -> list[str]:
+    path = root / "texts" / f"{clip_id}.txt"
+    lines = path.read_text().splitlines() if path.is_file() else []
+    return [line.split("#")[0].strip() for line in lines if line.strip()]
+
+
+def _prepared_clip(root: Path, split: str, clip_id: str, module) -> tuple[np.ndarray, dict]:
+    from motiondiff.data.prepared import SPLITS, load_split
+
+    if split and split not in SPLITS:
+        raise EditError(f"unknown split {split!r} in {split}:{clip_id}; choose from {', '.join(SPLITS)}")
+    examples = []
+    for name in [split] if split else SPLIT_ORDER:
+        data = load_split(root, name)
+        ids = [str(i) for i in data.arrays["ids"]]
+        if clip_id in ids:
+            i = ids.index(clip_id)
+            info = {"clip_id": clip_id, "split": name, "label": data.label("content", i), "captions": data.captions(i)}
+            return _encode_prepared(data, i, module, root), info
+        examples += [f"{name}:{c}" for c in ids[:2]]
+    where = f"the {split} split" if split else f"the {', '.join(SPLIT_ORDER)} splits"
+    raise EditError(f"no clip {clip_id!r} in {where} of {root}; clip ids look like {', '.join(examples[:3])}")
+
+
+def _encode_prepared(data, i: int, module, root: Path) -> np.ndarray:
+    rep: Representation = module.representation
+    a, s = data.arrays, data.clip_slice(i)
+    if float(data.meta.get("fps", 20.0)) != float(module.hparams.fps):
+        raise EditError(f"{root} is at {data.meta.get('fps')} fps, but this model runs at {module.hparams.fps} fps")
+    if not _uses_rig(rep):
+        return rep.encode(ClipMotion(joints=a["joints"][s]))
+    names, parents = tuple(str(n) for n in a["native_joint_names"]), tuple(int(p) for p in a["native_parents"])
+    if names != tuple(rep.skeleton.joint_names) or parents != tuple(rep.skeleton.parents):
+        raise EditError(f"{root} is stored on another rig than this model's {rep.name} rig; pass data=<its dataset>")
+    clip = ClipMotion(a["joints"][s], a["native_rotations"][s], a["native_root"][s],
+                      a["native_offsets"][i].astype(np.float64), rep.skeleton)  # fmt: skip
+    return rep.encode(clip)

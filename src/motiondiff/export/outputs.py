@@ -1,0 +1,67 @@
+"""What sample.py and edit.py write for each generated motion besides its arrays: videos, a BVH, an HTML viewer.
+
+One call per motion, `export_features`, from the de-normalised features of the model's representation (the BVH of
+a rotation representation then carries the model's own rotations) or from joints that were changed after decoding
+(smoothed: their BVH is solved by IK, so the file shows what was saved).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from motiondiff.data.representations import Representation
+from motiondiff.export import export_motion
+from motiondiff.export.bvh_export import export_bvh, export_bvh_from_features
+
+OUTPUT_FORMATS = ("mp4", "gif", "bvh", "html")  # the arrays (.npy) are always written
+
+
+def parse_formats(value: str | Sequence[str] | None) -> list[str]:
+    """``export=`` of the CLIs: "none", one format, "mp4,bvh" or a list; checked before any sampling."""
+    if value is None:
+        return []
+    items = [value] if isinstance(value, str) else list(value)
+    formats = [f.strip().lower() for item in items for f in str(item).split(",") if f.strip()]
+    formats = [f for f in formats if f != "none"]
+    unknown = [f for f in formats if f not in OUTPUT_FORMATS]
+    if unknown:
+        raise ValueError(
+            f"unknown export format(s) {', '.join(unknown)}; choose from {', '.join(OUTPUT_FORMATS)} (a list such "
+            "as export=[mp4,bvh,html]) or export=none"
+        )
+    return list(dict.fromkeys(formats))
+
+
+def export_features(
+    stem: str | Path,
+    representation: Representation,
+    features: np.ndarray,
+    fps: float,
+    formats: Sequence[str],
+    title: str = "",
+    joints: np.ndarray | None = None,
+) -> dict:
+    """Write ``{stem}.{format}`` for each format; returns {format: path} and, with a BVH, its fit error
+    ("bvh_max_error_m", "bvh_mean_error_m": FK of the file against the joints it was made from; generated joints
+    stretch their bones from frame to frame, which a BVH's fixed bone lengths cannot follow exactly). ``joints``: the motion to show when
+    it is not simply the features decoded (e.g. smoothed)."""
+    formats = parse_formats(formats)
+    stem = Path(stem)
+    written: dict = {}
+    if "bvh" in formats:
+        path = stem.parent / f"{stem.name}.bvh"
+        if joints is None:
+            report = export_bvh_from_features(path, representation, features, fps)
+        else:
+            report = export_bvh(path, joints, representation.skeleton, fps)
+        written.update(bvh=str(report.path), bvh_max_error_m=report.max_error, bvh_mean_error_m=report.mean_error,
+                       bvh_method=report.method)  # fmt: skip
+    others = [f for f in formats if f != "bvh"]
+    if others:
+        shown = representation.decode_numpy(np.asarray(features)) if joints is None else joints
+        paths = export_motion(stem, shown, representation.skeleton, fps, others, title=title)
+        written.update({fmt: str(p) for fmt, p in paths.items()})
+    return written
