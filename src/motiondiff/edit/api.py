@@ -104,11 +104,12 @@ def _generator(module, generator: torch.Generator | None, seed: int | None) -> t
 
 
 @torch.inference_mode()
-def _inpaint_motions(module, knowns, keeps, conds, num_samples, options, generator, progress) -> list[np.ndarray]:
-    """De-normalised features of num_samples edits per motion (padded to one batch), ``knowns[m]`` (N, D) exact
+def _inpaint_motions(module, motions, keeps, conds, num_samples, options, generator, progress) -> list[np.ndarray]:
+    """De-normalised features of num_samples edits per motion (padded to one batch), the input's features exact
     where ``keeps[m]`` (N, D, bool)."""
     from motiondiff.cli.sample import condition_batch
 
+    knowns = [m.features for m in motions]
     order = [m for m in range(len(knowns)) for _ in range(num_samples)]
     lengths = torch.tensor([len(knowns[m]) for m in order])
     b, n, d = len(order), int(lengths.max()), module.representation.dim
@@ -174,8 +175,7 @@ def inbetween(
     settings.update(kind="inbetween", prefix_frames=[p for p, _ in frames], suffix_frames=[s for _, s in frames],
                     close_root=bool(close_root and needs_root_closure(rep)), seed=seed, num_samples=num_samples)  # fmt: skip
     gen = _generator(module, generator, seed)
-    knowns = [m.features for m in motions]
-    features = _inpaint_motions(module, knowns, keeps, conds, num_samples, options, gen, progress)
+    features = _inpaint_motions(module, motions, keeps, conds, num_samples, options, gen, progress)
     if settings["close_root"]:
         order = [m for m in range(len(motions)) for _ in range(num_samples)]
         features = [
@@ -214,6 +214,5 @@ def edit_parts(
     settings.update(kind="parts", parts=parts if isinstance(parts, str | int) else list(parts),
                     kept_joints=[rep.skeleton.joint_names[j] for j in joints], seed=seed, num_samples=num_samples)  # fmt: skip
     gen = _generator(module, generator, seed)
-    knowns = [m.features for m in motions]
-    features = _inpaint_motions(module, knowns, keeps, conds, num_samples, options, gen, progress)
+    features = _inpaint_motions(module, motions, keeps, conds, num_samples, options, gen, progress)
     return _result(module, "parts", motions, conds, keeps, kept_frames, joints, features, num_samples, settings)
