@@ -54,7 +54,43 @@ def build_module(cfg: DictConfig, dm: MotionDataModule) -> MotionDiffusionModule
         dataset=cfg.dataset.name,
         representation=dm.representation_spec(),
         loss=to_dict(cfg.loss),
+        known_conditioning=to_dict(cfg.known_conditioning) if cfg.get("known_conditioning") else None,
     )
+
+
+# Parameters a fine-tune may add to the weights it starts from (they start at zero: the model's own predictions).
+NEW_IN_FINE_TUNE = ("denoiser.known_proj.",)
+
+
+def init_weights(module: MotionDiffusionModule, source: str) -> None:
+    """Start from the weights of a checkpoint or release (a fine-tune), not a resume: optimizer and step start anew.
+
+    The architecture must match, except for parameters this run adds (``NEW_IN_FINE_TUNE``)."""
+    import torch
+    from safetensors.torch import load_file
+
+    from motiondiff.release import release_paths
+
+    path = Path(source)
+    if path.suffix in (".safetensors", ".json"):
+        path = release_paths(path)[0]
+    if not path.is_file():
+        raise UsageError(f"init_from={source} not found; give a .ckpt of a run or a release (.safetensors)")
+    if path.suffix == ".safetensors":
+        state = load_file(str(path))
+    else:
+        state = torch.load(path, map_location="cpu", weights_only=True)["state_dict"]
+    own = module.state_dict()
+    shapes = [k for k in state if k in own and state[k].shape != own[k].shape]
+    missing = [k for k in own if k not in state and not k.startswith(NEW_IN_FINE_TUNE)]
+    unexpected = [k for k in state if k not in own]
+    if shapes or missing or unexpected:
+        raise UsageError(
+            f"init_from={source} does not fit this model (shape differs: {shapes[:3]}, missing: {missing[:3]}, "
+            f"unexpected: {unexpected[:3]}); use the same model, backbone, condition and dataset as its run"
+        )
+    module.load_state_dict(state, strict=False)
+    log.info("initialised from %s (%d tensors)", source, len(state))
 
 
 def evaluation_callbacks(callbacks: list) -> list:
@@ -82,6 +118,8 @@ def run(cfg: DictConfig) -> Path:
     dm: MotionDataModule = instantiate(cfg.dataset.datamodule)
     dm.setup("fit")
     module = build_module(cfg, dm)
+    if cfg.get("init_from"):  # before the text table: the centring of caption features comes with the weights
+        init_weights(module, cfg.init_from)
     if cfg.condition.kind == "text":
         module.set_text_table(*build_text_table(cfg, dm))
     loggers = [instantiate(c) for c in (cfg.logger or {}).values()]

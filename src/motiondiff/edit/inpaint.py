@@ -8,6 +8,7 @@ Two ways to hold the known part, both on normalised features with a boolean ``ke
   replaced by a fresh forward-noised copy of the input, x_{t−1} ← keep ⊙ q(x_{t−1} | x_known) + (1 − keep) ⊙ x_{t−1}.
 
 Either way the returned features equal the input exactly where ``keep`` (the last step is made clean on the mask).
+A model trained with ``known_conditioning`` (in-painting-aware) is also given the clean known part as an input.
 ``resample=U`` (a sampler option, ``diffusion.samplers``) adds RePaint's resampling to either mode.
 """
 
@@ -114,5 +115,6 @@ def inpaint(
         if mode == "overwrite"
         else {"xt_hook": renoise_known(module.diffusion, known, keep, generator)}
     )
-    out = module.sample(cond, lengths, generator=generator, **hooks, **sample_kwargs)
+    # a model trained with known_conditioning also reads the known part directly (others ignore it)
+    out = module.sample(cond, lengths, generator=generator, known=known, keep=keep, **hooks, **sample_kwargs)
     return torch.where(keep, known, out)

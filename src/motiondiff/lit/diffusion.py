@@ -10,10 +10,13 @@ from __future__ import annotations
 import math
 
 import lightning as L
+import numpy as np
 import torch
 
 from motiondiff.data.representation_spec import representation_from_spec
 from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, guided_model_fn, make_betas
+from motiondiff.edit.masks import part_keep
+from motiondiff.lit.known_masks import random_known_keep
 from motiondiff.losses import GeometricLoss
 from motiondiff.models.backbones import build_backbone
 from motiondiff.models.conditioning import build_condition
@@ -39,6 +42,7 @@ class MotionDiffusionModule(L.LightningModule):
         dataset: str = "",
         representation: dict | None = None,
         loss: dict | None = None,
+        known_conditioning: dict | None = None,
     ):
         super().__init__()
         self.save_hyperparameters()
@@ -55,6 +59,7 @@ class MotionDiffusionModule(L.LightningModule):
                 cond_dim=cond_dim,
                 num_actions=len(action_names or []) or None,
             ),
+            known_input=bool(known_conditioning),
         )
         self.diffusion = GaussianDiffusion(
             make_betas(diffusion["schedule"], diffusion["steps"]),
@@ -78,6 +83,13 @@ class MotionDiffusionModule(L.LightningModule):
         self.center_text = bool(condition.get("center_text", True))
         self.register_buffer("text_center", torch.zeros(cond_dim or 0))
         self.register_buffer("text_scale", torch.ones(()))
+        # In-painting-aware training (see models/denoiser.py and lit/known_masks.py): how often a sample is shown a
+        # known part, and the dims of each body part it may be shown.
+        self.known_conditioning = dict(known_conditioning or {})
+        if self.known_conditioning:
+            skeleton = self.representation.skeleton
+            parts = [part_keep(self.representation, joints) for joints in skeleton.parts.values()]
+            self.register_buffer("part_masks", torch.tensor(np.array(parts), dtype=torch.bool), persistent=False)
 
     # ---- conditions ---------------------------------------------------------------------------------------------
     def set_text_table(self, table: torch.Tensor, index: dict[str, int]) -> None:
@@ -114,7 +126,14 @@ class MotionDiffusionModule(L.LightningModule):
         noise = torch.randn_like(x0)
         x_t = self.diffusion.q_sample(x0, t, noise)
         drop = torch.rand(b, device=x0.device) < drop_prob
-        out = self.denoiser(x_t, t, cond=self.batch_condition(batch), mask=mask, drop_cond=drop)
+        known = {}
+        if self.known_conditioning:
+            keep = random_known_keep(
+                mask, self.part_masks, float(self.known_conditioning.get("prob", 0.5)),
+                float(self.known_conditioning.get("frame_share", 0.5)),
+            )  # fmt: skip
+            known = {"known": x0, "keep": keep}
+        out = self.denoiser(x_t, t, cond=self.batch_condition(batch), mask=mask, drop_cond=drop, **known)
         loss = self.diffusion.loss(out, x0, noise, t, mask=mask)
         parts = {"diffusion": loss.detach()}
         if self.geometric is not None:
@@ -175,19 +194,25 @@ class MotionDiffusionModule(L.LightningModule):
         x0_hook=None,
         xt_hook=None,
         resample: int = 1,
+        known: torch.Tensor | None = None,
+        keep: torch.Tensor | None = None,
     ) -> torch.Tensor:
         """Generate normalised features (B, max(lengths), D); frames past each length are padding. ``resample``:
-        RePaint's repeats per step for editing (see ``diffusion.samplers``)."""
+        RePaint's repeats per step for editing (see ``diffusion.samplers``). ``known``/``keep`` (B, N, D): the clean
+        known part of an edit, read by models trained with ``known_conditioning`` (ignored by others)."""
         self.eval()
         b, n = len(lengths), int(lengths.max())
         mask = torch.arange(n, device=self.device)[None] < lengths.to(self.device)[:, None]
+        extra = {}
+        if self.denoiser.known_input and known is not None:
+            extra = {"known": known.to(self.device, torch.float32), "keep": keep.to(self.device).expand(known.shape)}
         if cond is None:  # unconditioned: the model's ∅ condition (what guidance uses as its unconditional half)
             drop = torch.ones(b, dtype=torch.bool, device=self.device)
 
             def fn(x, t):
-                return self.denoiser(x, t, cond=None, mask=mask, drop_cond=drop)
+                return self.denoiser(x, t, cond=None, mask=mask, drop_cond=drop, **extra)
         else:
-            fn = guided_model_fn(self.denoiser, cond, guidance, mask=mask)
+            fn = guided_model_fn(self.denoiser, cond, guidance, mask=mask, **extra)
         shape = (b, n, self.hparams.feature_dim)
         if sampler == "ddim":
             return ddim_sample(

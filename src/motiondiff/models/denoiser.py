@@ -2,6 +2,12 @@
 
 It knows nothing about noise schedules: it maps a noisy sequence to a prediction (x0, ε or v, as the diffusion code
 decides) of the same shape.
+
+With ``known_input=True`` the network also reads the clean known part of an edit (in-betweening frames, a kept body
+part) per frame: ``known_proj([keep ⊙ x_known, keep])`` is added to the frame tokens. Sampling-time in-painting alone
+(MDM's overwrite) only shows the known part through x_t, which at high noise carries almost none of it, so a small
+model generates a middle that ignores the pose it must meet; seeing the clean known part fixes that. The projection
+starts at zero, so a trained model fine-tuned with it starts from its own predictions.
 """
 
 from __future__ import annotations
@@ -9,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+import torch
 from torch import Tensor, nn
 
 from motiondiff.models.backbones import build_backbone
@@ -24,7 +31,9 @@ PRESETS: dict[str, dict[str, Any]] = {
 
 
 class MDMDenoiser(nn.Module):
-    def __init__(self, feature_dim: int, d_model: int, backbone: nn.Module, condition: nn.Module):
+    def __init__(
+        self, feature_dim: int, d_model: int, backbone: nn.Module, condition: nn.Module, known_input: bool = False
+    ):
         super().__init__()
         if getattr(condition, "d_model", d_model) is None:  # NoCondition() built without a size takes ours
             condition.d_model = d_model
@@ -37,6 +46,11 @@ class MDMDenoiser(nn.Module):
         self.condition = condition
         self.backbone = backbone
         self.output_proj = nn.Linear(d_model, feature_dim)
+        self.known_input = bool(known_input)
+        if self.known_input:
+            self.known_proj = nn.Linear(2 * feature_dim, d_model)
+            nn.init.zeros_(self.known_proj.weight)
+            nn.init.zeros_(self.known_proj.bias)
 
     def forward(
         self,
@@ -45,9 +59,13 @@ class MDMDenoiser(nn.Module):
         cond: Tensor | None = None,
         mask: Tensor | None = None,
         drop_cond: Tensor | None = None,
+        known: Tensor | None = None,
+        keep: Tensor | None = None,
     ) -> Tensor:
         """x (B, N, D) noisy motion, t (B,) long steps, cond (B, cond_dim) text features | (B,) action ids | None,
-        mask (B, N) bool True = valid frame, drop_cond (B,) bool True = use ∅. Returns (B, N, D)."""
+        mask (B, N) bool True = valid frame, drop_cond (B,) bool True = use ∅. Returns (B, N, D).
+        known (B, N, D) clean features and keep (B, N, D) bool where they are known: only for ``known_input``
+        models (None: nothing known)."""
         if x.ndim != 3 or x.shape[-1] != self.feature_dim:
             raise ValueError(f"x must be (B, N, {self.feature_dim}), got {tuple(x.shape)}")
         batch, frames = x.shape[:2]
@@ -58,8 +76,22 @@ class MDMDenoiser(nn.Module):
         if mask is not None and mask.shape != (batch, frames):
             raise ValueError(f"mask must be ({batch}, {frames}) bool, got {tuple(mask.shape)}")
         token = self.timestep_embedder(t) + self.condition(cond, drop_cond, batch_size=batch, device=x.device)
-        h = self.backbone(self.input_proj(x), token, mask)
+        h = self.input_proj(x)
+        if self.known_input:
+            h = h + self._known_tokens(known, keep, x)
+        elif known is not None:
+            raise ValueError("this denoiser was built without known_input: it cannot read a known part")
+        h = self.backbone(h, token, mask)
         return self.output_proj(h)
+
+    def _known_tokens(self, known: Tensor | None, keep: Tensor | None, x: Tensor) -> Tensor:
+        if known is None:  # nothing known: the projection of all zeros is its bias
+            return self.known_proj.bias
+        if keep is None or known.shape != x.shape or keep.shape != x.shape:
+            raise ValueError(f"known and keep must both be {tuple(x.shape)}, got {tuple(known.shape)} and "
+                             f"{None if keep is None else tuple(keep.shape)}")  # fmt: skip
+        keep = keep.to(x.dtype)
+        return self.known_proj(torch.cat([known.to(x.dtype) * keep, keep], dim=-1))
 
     @classmethod
     def from_config(
@@ -71,6 +103,7 @@ class MDMDenoiser(nn.Module):
         condition: str = "text",
         cond_dim: int | None = None,
         num_actions: int | None = None,
+        known_input: bool = False,
         **overrides: Any,
     ) -> MDMDenoiser:
         """Build from a preset name (or dict) plus overrides, e.g. from_config(263, preset="paper", cond_dim=512)."""
@@ -85,6 +118,7 @@ class MDMDenoiser(nn.Module):
             d_model,
             backbone=build_backbone(backbone, **arch),
             condition=build_condition(condition, d_model, cond_dim=cond_dim, num_actions=num_actions),
+            known_input=known_input,
         )
 
 
