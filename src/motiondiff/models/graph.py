@@ -19,12 +19,14 @@ neighbours, i.e. its actions, so the weights of one caption sum to 1).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import torch
-from torch import nn
+from torch import Tensor, nn
 from torch.nn import functional as F
 
 NO_EDGE = -1
+NODE_KINDS = ("motion", "action", "specific")  # index = kind id in GraphBatch.kinds
 
 
 def edge_type_matrix(num_nodes: int, edges: Sequence, roles: Sequence[str]) -> torch.Tensor:
@@ -80,3 +82,51 @@ class SemanticGraphAttention(nn.Module):
 def action_weights(attention: torch.Tensor, motion: int, actions: Sequence[int]) -> torch.Tensor:
     """e~^k: the motion node's attention on each action node (the local actions' guiding weights)."""
     return attention[..., motion, list(actions)]
+
+
+@dataclass
+class GraphBatch:
+    """Padded caption graphs: node features (B, K, D), kind ids (B, K) into NODE_KINDS (−1: padding), edge types
+    (B, K, K) from ``models.graph.edge_type_matrix`` (−1: none), the motion node's index and action nodes' indices
+    (B, A) (−1: padding), in each graph's action order."""
+
+    features: Tensor
+    kinds: Tensor
+    types: Tensor
+    actions: Tensor
+
+    @property
+    def valid(self) -> Tensor:
+        return self.kinds >= 0
+
+    def to(self, device) -> GraphBatch:
+        return GraphBatch(*(t.to(device) for t in (self.features, self.kinds, self.types, self.actions)))
+
+    def index(self, rows) -> GraphBatch:
+        return GraphBatch(self.features[rows], self.kinds[rows], self.types[rows], self.actions[rows])
+
+
+def batch_graphs(graphs: Sequence, features: Sequence[torch.Tensor], roles: Sequence[str]) -> GraphBatch:
+    """Pad caption graphs (``motiondiff.text.parse.CaptionGraph``) and their node features ((n_i, D) each, node
+    order as in the graph) into one GraphBatch."""
+    if len(graphs) != len(features):
+        raise ValueError(f"{len(graphs)} graphs but {len(features)} feature tensors")
+    k = max(len(g.nodes) for g in graphs)
+    a = max(1, max(len(g.action_ids()) for g in graphs))
+    b, d = len(graphs), features[0].shape[-1]
+    out = GraphBatch(
+        torch.zeros(b, k, d),
+        torch.full((b, k), -1, dtype=torch.long),
+        torch.full((b, k, k), NO_EDGE, dtype=torch.long),
+        torch.full((b, a), -1, dtype=torch.long),
+    )
+    for i, (graph, feats) in enumerate(zip(graphs, features, strict=True)):
+        n = len(graph.nodes)
+        if feats.shape[0] != n:
+            raise ValueError(f"graph {i} has {n} nodes but {feats.shape[0]} feature rows")
+        out.features[i, :n] = feats
+        out.kinds[i, :n] = torch.tensor([NODE_KINDS.index(node.kind) for node in graph.nodes])
+        out.types[i, :n, :n] = edge_type_matrix(n, graph.edges, roles)
+        ids = graph.action_ids()
+        out.actions[i, : len(ids)] = torch.tensor(ids, dtype=torch.long)
+    return out

@@ -1,0 +1,121 @@
+"""GuidedMotion's hierarchical latent denoisers and their LightningModule: each level reads only the node kinds and
+the previous latent the paper gives it, ∅ hides the caption, training reaches every part, and sampling with a local
+action's energy guidance pulls the action latent towards that action's latent as its weight grows."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
+from motiondiff.lit.latent import HierarchicalLatentModule
+from motiondiff.models.graph import batch_graphs
+from motiondiff.models.hierarchical import LatentDenoiser
+from motiondiff.text.parse import ROLES, parse_caption
+
+SIZE = dict(d_model=32, num_layers=1, num_heads=2, ff_size=64, dropout=0.0)
+VAE = {"latent_dim": 16, "d_model": 32, "num_layers": 1, "num_heads": 2, "ff_size": 64, "dropout": 0.0}
+CAPTIONS = [
+    "a person walks forward and raises both hands",
+    "a person jumps",
+    "someone bows, then kicks with the left leg",
+]
+
+
+def _graphs(captions, dim=8, seed=0):
+    g = torch.Generator().manual_seed(seed)
+    graphs = [parse_caption(c) for c in captions]
+    return graphs, [torch.randn(len(x.nodes), dim, generator=g) for x in graphs]
+
+
+def test_graph_batch_pads_nodes_kinds_edges_and_actions():
+    graphs, feats = _graphs(CAPTIONS)
+    batch = batch_graphs(graphs, feats, ROLES)
+    k = max(len(g.nodes) for g in graphs)
+    assert batch.features.shape == (3, k, 8) and batch.types.shape == (3, k, k)
+    for i, g in enumerate(graphs):
+        n = len(g.nodes)
+        assert batch.kinds[i, :n].tolist() == [("motion", "action", "specific").index(x.kind) for x in g.nodes]
+        assert (batch.kinds[i, n:] == -1).all() and (batch.types[i, n:] == -1).all()
+        ids = g.action_ids()
+        assert batch.actions[i, : len(ids)].tolist() == ids and (batch.actions[i, len(ids) :] == -1).all()
+    assert batch.actions.shape[1] == max(len(g.action_ids()) for g in graphs) == 2
+
+
+def test_each_level_reads_only_its_node_kinds_and_null_hides_the_caption():
+    torch.manual_seed(0)
+    graphs, feats = _graphs(CAPTIONS)
+    batch = batch_graphs(graphs, feats, ROLES)
+    z, t = torch.randn(3, 4, 16), torch.tensor([5, 500, 900])
+    action = LatentDenoiser(4, 2, 8, 16, kinds=(0, 1), **SIZE).eval()
+    prev = torch.randn(3, 2, 16)
+    ref = action(z, t, batch.features, batch.kinds, prev)
+    specific = batch.features.clone()
+    specific[batch.kinds == 2] += 5.0  # the action level must not see specific nodes
+    assert torch.allclose(action(z, t, specific, batch.kinds, prev), ref, atol=1e-5)
+    verbs = batch.features.clone()
+    verbs[batch.kinds == 1] += 5.0
+    assert not torch.allclose(action(z, t, verbs, batch.kinds, prev), ref, atol=1e-3)
+    assert not torch.allclose(action(z, t, batch.features, batch.kinds, prev + 1.0), ref, atol=1e-3)
+    drop = torch.ones(3, dtype=torch.bool)
+    assert torch.allclose(action(z, t, batch.features, batch.kinds, prev, drop),
+                          action(z, t, verbs, batch.kinds, prev, drop), atol=1e-5)  # fmt: skip
+    with pytest.raises(ValueError, match="previous level"):
+        action(z, t, batch.features, batch.kinds)
+    with pytest.raises(ValueError, match="latent tokens"):
+        action(z[:, :2], t, batch.features, batch.kinds, prev)
+
+
+@pytest.fixture(scope="module")
+def setup():
+    dm = PreparedDataModule(embedded_data_root(), batch_size=8, max_frames=40, seed=0)
+    dm.setup("fit")
+    ds = dm.dataset("train")
+    common = dict(feature_dim=dm.feature_dim, optim={"lr": 1e-3}, mean=ds.mean.tolist(), std=ds.std.tolist(),
+                  max_frames=dm.max_frames, fps=dm.fps, num_joints=dm.num_joints, dataset="bandai_mini",
+                  representation=dm.representation_spec())  # fmt: skip
+    vaes = {level: {**common, "vae": {**VAE, "tokens": q}, "level": level}
+            for level, q in (("motion", 2), ("action", 4), ("specific", 8))}  # fmt: skip
+    torch.manual_seed(0)
+    module = HierarchicalLatentModule(vaes, SIZE, {"steps": 100}, {"lr": 1e-3}, node_dim=8, text_encoder={})
+    batches = [next(iter(dm.train_dataloader()))]
+    module.set_latent_stats(batches)
+    texts = sorted({t for b in batches for t in b["text"]} | set(CAPTIONS))
+    graphs, feats = _graphs(texts)
+    module.set_graph_table({t: (g, f) for t, g, f in zip(texts, graphs, feats, strict=True)})
+    return module, batches[0]
+
+
+def test_latents_are_standardised_and_training_reaches_every_part(setup):
+    module, batch = setup
+    for level, q in (("motion", 2), ("action", 4), ("specific", 8)):
+        z = module.encode(level, batch["motion"], batch["mask"])
+        assert z.shape == (8, q, 16)
+        assert z.mean(0).abs().max() < 1e-4 and (z.std(0) - 1).abs().max() < 1e-3
+    module.train()
+    loss, parts = module._loss(batch, 0.1)
+    assert set(parts) == {"motion", "action", "specific"} and torch.isfinite(loss)
+    loss.backward()
+    for name in ("graph_attention.W.weight", "levels.motion.out.weight", "levels.action.previous_in.weight",
+                 "levels.specific.node_in.weight"):  # fmt: skip
+        assert module.denoiser.get_parameter(name).grad.abs().sum() > 0, name
+    assert all(p.grad is None for p in module.vaes.parameters())  # the VAEs stay frozen
+    assert not module.vaes.training
+
+
+def test_energy_guidance_pulls_the_action_latent_towards_a_local_action(setup):
+    module, _ = setup
+    graphs = module.graphs_of([CAPTIONS[0]])
+    lengths = torch.tensor([30])
+    target = torch.randn(1, 2, 4, 16, generator=torch.Generator().manual_seed(3))  # c^k of the 2 local actions
+    distances = []
+    for w in (0.0, 1.0, 20.0):
+        weights = torch.tensor([[w, 0.0]])
+        feats, latents = module.sample(graphs, lengths, steps={"motion": 5, "action": 5, "specific": 5},
+                                       local_latents=target, local_weights=weights, rho=0.05,
+                                       generator=torch.Generator().manual_seed(0), return_latents=True)  # fmt: skip
+        distances.append(float((latents["action"] - target[:, 0]).norm()))
+        assert feats.shape == (1, 30, module.hparams.vaes["motion"]["feature_dim"])
+    assert distances[0] > distances[1] > distances[2]
+    with pytest.raises(ValueError, match="one per action node"):
+        module.sample(graphs, lengths, steps={"motion": 2, "action": 2, "specific": 2}, local_latents=target[:, :1])
