@@ -323,11 +323,15 @@ class PreparedDataModule(ClipDataModule):
         unit_length: int = 1,
         seed: int = 0,
         representation: str | None = None,
+        extra_train: list[str | Path] | None = None,
     ):
         super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation)
         self.root = Path(root)
         self.meta: dict = {}
         self._prepared: dict[str, PreparedSplit] = {}
+        # prepared folders whose train clips join this train split (bandai_mini's single clips beside composed ones)
+        self.extra_train = [Path(p) for p in extra_train or ()]
+        self._extra: dict[Path, PreparedSplit] = {}
 
     def prepared(self, split: str) -> PreparedSplit:
         if split not in self._prepared:
@@ -335,21 +339,32 @@ class PreparedDataModule(ClipDataModule):
             self.meta = self._prepared[split].meta
         return self._prepared[split]
 
+    def _parts(self, split: str) -> list[PreparedSplit]:
+        """The split, and on train the extra_train folders' train splits (loaded once)."""
+        if split != "train":
+            return [self.prepared(split)]
+        for r in self.extra_train:
+            self._extra[r] = self._extra.get(r) or load_prepared_split(r, "train")
+        return [self.prepared(split)] + [self._extra[r] for r in self.extra_train]
+
     def load_clips(self, split: str) -> ClipSplit:
-        data = self.prepared(split)
+        data, parts = self.prepared(split), self._parts(split)
         rig = self.prepared("train").rig()
+        names = list(data.meta["labels"]["content"])
+        if any(list(d.meta["labels"]["content"]) != names for d in parts):  # action ids index one list
+            raise ValueError(f"extra_train folders {self.extra_train} must have the content labels of {self.root}")
         clips = [
             LabelledClip(r.id, replace(c, rig=rig), r.texts, r.action, r.meta)
-            for r, c in zip(data.records(), data.clips(), strict=True)
+            for d in parts
+            for r, c in zip(d.records(), d.clips(), strict=True)
         ]
-        names = list(data.meta["labels"]["content"])
         return ClipSplit(clips, names, fps=float(data.meta.get("fps", 20.0)), feature_skeleton=SMPL22, rig=rig)
 
     def encode(self, split: str) -> list[np.ndarray]:
         if self.representation_name != "hml263":
             return super().encode(split)
-        data = self.prepared(split)  # the prepared features: same function, already computed
-        return [data.arrays["features"][data.feature_slice(i)] for i in range(data.num_clips)]
+        # the prepared features: same function, already computed
+        return [d.arrays["features"][d.feature_slice(i)] for d in self._parts(split) for i in range(d.num_clips)]
 
     def statistics(self) -> tuple[np.ndarray, np.ndarray]:
         if self.representation_name != "hml263":
