@@ -119,3 +119,36 @@ def test_energy_guidance_pulls_the_action_latent_towards_a_local_action(setup):
     assert distances[0] > distances[1] > distances[2]
     with pytest.raises(ValueError, match="one per action node"):
         module.sample(graphs, lengths, steps={"motion": 2, "action": 2, "specific": 2}, local_latents=target[:, :1])
+
+
+def test_local_actions_from_given_motions_steer_the_sample(setup):
+    from motiondiff.guided.local_actions import LocalActionError, guided_sample, local_actions_for
+
+    module, batch = setup
+    motions = [module.denormalise(batch["motion"][k, :20]) for k in (0, 1)]  # two real clips as the local actions
+    graph, local = local_actions_for(module, CAPTIONS[0], motions=motions)
+    assert local.texts == ["walks forward", "raises both hands"] and local.sources == ["given", "given"]
+    assert local.latents.shape == (2, 4, 16)
+    expected = module.encode("action", batch["motion"][:1, :20], torch.ones(1, 20, dtype=torch.bool))
+    assert torch.allclose(local.latents[:1], expected, atol=1e-5)
+
+    # node features without loading a text model: the module was built with 8-d random ones
+    from motiondiff.guided import local_actions as la
+
+    feats = module.graph_table[CAPTIONS[0]][1]
+    original = la.graph_batch
+    la.graph_batch = lambda latent, g, enc, copies=1: batch_graphs([g] * copies, [feats] * copies, ROLES)
+    try:
+        kwargs = dict(steps={"motion": 3, "action": 3, "specific": 3}, rho=0.05)
+        out = {w: guided_sample(module, graph, None, local, torch.tensor([20, 20]), weights=[w, 0.0],
+                                generator=torch.Generator().manual_seed(0), **kwargs) for w in (0.0, 5.0)}  # fmt: skip
+        assert out[0.0].shape == (2, 20, module.hparams.vaes["motion"]["feature_dim"])
+        assert not torch.allclose(out[0.0], out[5.0])
+        with pytest.raises(LocalActionError, match="one per action"):
+            guided_sample(module, graph, None, local, torch.tensor([20]), weights=[1.0], **kwargs)
+        with pytest.raises(LocalActionError, match=">= 0"):
+            guided_sample(module, graph, None, local, torch.tensor([20]), weights=[1.0, -1.0], **kwargs)
+    finally:
+        la.graph_batch = original
+    with pytest.raises(LocalActionError, match="2 action node"):
+        local_actions_for(module, CAPTIONS[0], texts=["walks forward"], motions=motions[:1])

@@ -179,6 +179,12 @@ def slug(text: str | None) -> str:
 
 
 def run(cfg: DictConfig) -> Path:
+    if cfg.get("method", "mdm") == "guidedmotion":
+        from motiondiff.cli.sample_guided import run as run_guided
+
+        return run_guided(cfg)
+    if cfg.get("method", "mdm") not in ("mdm", "vvmdm"):
+        raise UsageError(f"unknown method={cfg.method!r}; choose mdm, vvmdm or guidedmotion")
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads

@@ -62,3 +62,17 @@ def node_features(graphs: Sequence[CaptionGraph], encoder) -> list[torch.Tensor]
             rows.append(h[positions].mean(0))
         out.append(torch.stack(rows))
     return out
+
+
+def graph_table(texts: Sequence[str], encoder, batch_size: int = 64) -> dict[str, tuple[CaptionGraph, torch.Tensor]]:
+    """caption -> (semantic graph, node features) for every distinct caption (parsed and encoded in batches)."""
+    from motiondiff.text.parse import parse_captions
+
+    unique = sorted(set(texts))
+    table = {}
+    for start in range(0, len(unique), batch_size):
+        chunk = unique[start : start + batch_size]
+        graphs = parse_captions(chunk)
+        for text, graph, feats in zip(chunk, graphs, node_features(graphs, encoder), strict=True):
+            table[text] = (graph, feats.float().cpu())
+    return table

@@ -1,0 +1,1 @@
+"""GuidedMotion sampling with local actions (see local_actions.py)."""
