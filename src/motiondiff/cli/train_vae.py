@@ -1,0 +1,104 @@
+"""`python train_vae.py [level=motion|action|specific] ...`: train one of GuidedMotion's motion VAEs.
+
+Same datamodule, trainer, loggers and checkpointing as train.py; the best checkpoint is the one with the lowest
+validation MPJPE (`best-mpjpe-*.ckpt`), and run.json records the steps, wall time and parameter count that the
+level comparison (`python -m motiondiff.eval.vae_levels`) reports.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from pathlib import Path
+
+import lightning as L
+from hydra.core.hydra_config import HydraConfig
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf, open_dict
+
+from motiondiff.atomic import atomic_write
+from motiondiff.cli.common import UsageError, to_dict
+from motiondiff.data.datamodules import MotionDataModule
+from motiondiff.lit.vae import MotionVAEModule
+from motiondiff.models.vae import LEVEL_TOKENS
+
+log = logging.getLogger(__name__)
+
+
+def resolve_tokens(level: str | None, tokens: int | None) -> int:
+    """Q from `vae.tokens` when given, else from the level; a level that is not one of the three is an error."""
+    if level is not None and level not in LEVEL_TOKENS:
+        choices = ", ".join(f"{k} (Q={v})" for k, v in LEVEL_TOKENS.items())
+        raise UsageError(f"unknown level={level!r}; choose one of {choices}, or set vae.tokens=<Q> directly")
+    if tokens is not None:
+        if int(tokens) < 1:
+            raise UsageError(f"vae.tokens must be a positive number of latent tokens, got {tokens}")
+        return int(tokens)
+    if level is None:
+        raise UsageError("set level=motion|action|specific or vae.tokens=<Q>")
+    return LEVEL_TOKENS[level]
+
+
+def build_module(cfg: DictConfig, dm: MotionDataModule, tokens: int) -> MotionVAEModule:
+    ds = dm.dataset("train")
+    vae = {**to_dict(cfg.vae), "tokens": tokens}
+    return MotionVAEModule(
+        feature_dim=dm.feature_dim,
+        vae=vae,
+        optim=to_dict(cfg.optim),
+        mean=ds.mean.tolist(),
+        std=ds.std.tolist(),
+        max_frames=dm.max_frames,
+        fps=dm.fps,
+        num_joints=dm.num_joints,
+        kl_weight=float(cfg.kl_weight),
+        level=cfg.level,
+        dataset=cfg.dataset.name,
+        representation=dm.representation_spec(),
+    )
+
+
+def _loggers(cfg: DictConfig) -> list:
+    # The shared W&B logger names runs after the diffusion model's groups, which a VAE run does not have.
+    if cfg.logger and "wandb" in cfg.logger:
+        with open_dict(cfg):
+            cfg.logger.wandb.name = f"{cfg.dataset.name}-vae-{cfg.level}-{cfg.vae.name}"
+    return [instantiate(c) for c in (cfg.logger or {}).values()]
+
+
+def run(cfg: DictConfig) -> Path:
+    tokens = resolve_tokens(cfg.level, cfg.vae.tokens)  # before any work: a bad level fails at once
+    ckpt = cfg.ckpt_path
+    if ckpt is not None and not Path(ckpt).is_file():
+        raise UsageError(f"ckpt_path={ckpt} not found; pass the last.ckpt of the run to resume")
+    L.seed_everything(cfg.seed, workers=True)
+    out = Path(HydraConfig.get().runtime.output_dir)
+    dm: MotionDataModule = instantiate(cfg.dataset.datamodule)
+    dm.setup("fit")
+    module = build_module(cfg, dm, tokens)
+    callbacks = [instantiate(c) for c in (cfg.callbacks or {}).values() if c is not None]
+    trainer = L.Trainer(**OmegaConf.to_container(cfg.trainer, resolve=True), logger=_loggers(cfg),
+                        callbacks=callbacks, default_root_dir=out)  # fmt: skip
+    n_params = sum(p.numel() for p in module.vae.parameters() if p.requires_grad)
+    log.info("motion VAE, level %s (Q=%d): %.2f M parameters; outputs in %s", cfg.level, tokens, n_params / 1e6, out)
+    start = time.perf_counter()
+    trainer.fit(module, datamodule=dm, ckpt_path=ckpt)
+    seconds = time.perf_counter() - start
+    best = next((c for c in callbacks if getattr(c, "monitor", None) == "val/mpjpe"), None)
+    meta = {
+        "level": cfg.level,
+        "tokens": tokens,
+        "train_steps": trainer.global_step,
+        "train_seconds": round(seconds, 1),
+        "parameters": n_params,
+        "best_checkpoint": (best.best_model_path or None) if best else None,
+        "best_val_mpjpe_m": float(best.best_model_score) if best and best.best_model_score is not None else None,
+        "overrides": list(HydraConfig.get().overrides.task),
+    }
+    atomic_write(out / "run.json", lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)))
+    last = out / "checkpoints" / "last.ckpt"
+    print(f"\ntrained {trainer.global_step} steps in {seconds:.0f} s; checkpoint: {last}")
+    if meta["best_checkpoint"]:
+        print(f"best val MPJPE {meta['best_val_mpjpe_m']:.4f} m: {meta['best_checkpoint']}")
+    return last
