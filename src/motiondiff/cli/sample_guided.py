@@ -15,7 +15,13 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, find_checkpoint, text_encoder_kwargs
-from motiondiff.guided.local_actions import LocalActionError, guided_sample, local_actions_for
+from motiondiff.guided.local_actions import (
+    LocalActionError,
+    check_weights,
+    guided_sample,
+    local_actions_for,
+    local_descriptions,
+)
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.models.hierarchical import LEVELS
 
@@ -24,6 +30,11 @@ def _list(value) -> list | None:
     if value is None:
         return None
     return list(value) if isinstance(value, ListConfig | list | tuple) else [value]
+
+
+def _choice(value) -> int | list[int]:
+    """local_choice: one candidate index for every action, or a list with one per action."""
+    return [int(v) for v in value] if isinstance(value, ListConfig | list | tuple) else int(value)
 
 
 def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, int]:
@@ -61,13 +72,14 @@ def run(cfg: DictConfig) -> Path:
     if not 1 <= frames <= module.decoder.hparams.max_frames:
         raise UsageError(f"length must give 1..{module.decoder.hparams.max_frames} frames, got {frames}")
     generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
-    local = None
     weights = _list(cfg.local_weights)
-    try:
+    try:  # what can be checked from the caption alone fails before any model runs
+        _, described = local_descriptions(text)
+        check_weights(weights, len(described))
         graph, local = local_actions_for(
             module, text, mdm=load_module(find_checkpoint(cfg.local_model, cfg.paths.output_dir), cfg.device),
             texts=_list(cfg.local_actions), frames=frames, candidates=int(cfg.local_candidates),
-            choose=_list(cfg.local_choice) or 0, generator=generator,
+            choose=_choice(cfg.local_choice), generator=generator,
         )  # fmt: skip
         encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
         feats = guided_sample(module, graph, encoder, local, torch.full((cfg.num_samples,), frames),

@@ -133,6 +133,16 @@ def local_actions_for(
     return graph, LocalActions(texts, chosen, sources, encode_local_motions(latent, chosen), pool)
 
 
+def check_weights(weights: Sequence[float] | None, count: int) -> torch.Tensor:
+    """The user's w_k as a (count,) tensor (default 1 each); one per action, each >= 0."""
+    w = torch.ones(count) if weights is None else torch.as_tensor(list(weights), dtype=torch.float32)
+    if w.shape != (count,):
+        raise LocalActionError(f"{len(w)} local weight(s) for {count} local action(s): give one per action")
+    if bool((w < 0).any()):
+        raise LocalActionError(f"local weights must be >= 0 (0 switches an action's guidance off), got {w.tolist()}")
+    return w
+
+
 def graph_batch(latent, graph: CaptionGraph, encoder, copies: int = 1):
     """The GraphBatch of one caption, repeated ``copies`` times (node features from ``encoder``'s tokens)."""
     from motiondiff.text.graph_features import node_features
@@ -156,11 +166,6 @@ def guided_sample(
     graphs = graph_batch(latent, graph, encoder, b)
     if local is None:
         return latent.sample(graphs, lengths, **sample_kwargs)
-    count = local.latents.shape[0]
-    w = torch.ones(count) if weights is None else torch.as_tensor(list(weights), dtype=torch.float32)
-    if w.shape != (count,):
-        raise LocalActionError(f"{len(w)} local weight(s) for {count} local action(s): give one per action")
-    if bool((w < 0).any()):
-        raise LocalActionError(f"local weights must be >= 0 (0 switches an action's guidance off), got {w.tolist()}")
+    w = check_weights(weights, local.latents.shape[0])
     refs = local.latents[None].expand(b, -1, -1, -1)
     return latent.sample(graphs, lengths, local_latents=refs, local_weights=w[None].expand(b, -1), **sample_kwargs)
