@@ -102,3 +102,14 @@ def find_checkpoint(spec: str, output_dir: str | Path) -> Path:
 def text_encoder_kwargs(cfg_text: DictConfig | dict) -> dict:
     """Arguments of `build_text_encoder` from a text_encoder config (its `dim` is informational)."""
     return {k: v for k, v in to_dict(cfg_text).items() if k != "dim"}
+
+
+def key_value_args(argv: list[str], keys) -> dict[str, str]:
+    """``key=value`` arguments of a ``python -m motiondiff...`` command, each key one of ``keys``."""
+    args = {}
+    for a in argv:
+        key, eq, value = a.partition("=")
+        if not eq or key not in keys:
+            raise UsageError(f"unknown argument {a!r}; arguments are key=value with key one of {', '.join(keys)}")
+        args[key] = value
+    return args

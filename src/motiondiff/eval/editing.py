@@ -250,17 +250,12 @@ KEYS = ("checkpoint", "num_edits", "num_part_edits", "split", "modes", "sampler"
 
 
 def main(argv: list[str]) -> Path:
-    from motiondiff.cli.common import REPO_DIR, UsageError, find_checkpoint, quiet_tool_caches
+    from motiondiff.cli.common import REPO_DIR, UsageError, find_checkpoint, key_value_args, quiet_tool_caches
     from motiondiff.cli.sample import load_module
     from motiondiff.edit.masks import EditError
 
     quiet_tool_caches()
-    args = {}
-    for a in argv:
-        key, eq, value = a.partition("=")
-        if not eq or key not in KEYS:
-            raise UsageError(f"unknown argument {a!r}; arguments are key=value with key one of {', '.join(KEYS)}")
-        args[key] = value
+    args = key_value_args(argv, KEYS)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
     ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
     module = load_module(ckpt, args.get("device", "cpu"))

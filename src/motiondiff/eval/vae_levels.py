@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.cli.common import REPO_DIR, UsageError
+from motiondiff.cli.common import REPO_DIR, UsageError, key_value_args
 from motiondiff.eval import report
 from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_metrics
 from motiondiff.lit.vae import MotionVAEModule, mpjpe
@@ -205,12 +205,7 @@ def main(argv: list[str]) -> Path:
     from motiondiff.cli.common import quiet_tool_caches
 
     quiet_tool_caches()
-    args = {}
-    for a in argv:
-        key, eq, value = a.partition("=")
-        if not eq or key not in KEYS:
-            raise UsageError(f"unknown argument {a!r}; arguments are key=value with key one of {', '.join(KEYS)}")
-        args[key] = value
+    args = key_value_args(argv, KEYS)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
     paths = {lv: Path(args[lv]) if lv in args else newest_checkpoint(lv, outputs) for lv in LEVEL_TOKENS}
     loaded = {lv: load_vae(p) for lv, p in paths.items()}

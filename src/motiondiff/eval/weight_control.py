@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.cli.common import REPO_DIR, UsageError, find_checkpoint, text_encoder_kwargs
+from motiondiff.cli.common import REPO_DIR, UsageError, find_checkpoint, key_value_args, text_encoder_kwargs
 from motiondiff.eval.report import mean_ci
 
 KEYS = ("checkpoint", "local_model", "captions", "weights", "samples", "level_steps", "seed", "out", "data")
@@ -117,11 +117,11 @@ def main(argv: list[str] | None = None) -> int:
     from motiondiff.lit.latent import HierarchicalLatentModule
     from motiondiff.text.encoders import build_text_encoder
 
-    args = dict(a.split("=", 1) for a in (argv if argv is not None else sys.argv[1:]))
-    unknown = set(args) - set(KEYS)
-    if unknown or "checkpoint" not in args:
-        raise UsageError(f"usage: python -m motiondiff.eval.weight_control checkpoint=<ckpt> [{' '.join(KEYS[1:])}]; "
-                         f"unknown: {sorted(unknown)}")  # fmt: skip
+    args = key_value_args(argv if argv is not None else sys.argv[1:], KEYS)
+    if "checkpoint" not in args:
+        raise UsageError(
+            "usage: python -m motiondiff.eval.weight_control checkpoint=<train_latent.py ckpt> [key=value ...]"
+        )
     ckpt = Path(args["checkpoint"])
     module = HierarchicalLatentModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
     mdm = load_module(find_checkpoint(args.get("local_model", "shipped"), REPO_DIR / "outputs"))
