@@ -64,6 +64,8 @@ def test_each_level_reads_only_its_node_kinds_and_null_hides_the_caption():
         action(z, t, batch.features, batch.kinds)
     with pytest.raises(ValueError, match="latent tokens"):
         action(z[:, :2], t, batch.features, batch.kinds, prev)
+    with pytest.raises(ValueError, match="at least the latent width"):
+        LatentDenoiser(4, 2, 8, 64, d_model=32, num_layers=1, num_heads=2)
 
 
 @pytest.fixture(scope="module")

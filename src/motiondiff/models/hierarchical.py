@@ -41,6 +41,9 @@ class LatentDenoiser(nn.Module):
         kinds: tuple[int, ...] = (0,),
     ):
         super().__init__()
+        if d_model < latent_dim:  # ε is a full-rank latent_dim vector: a narrower stream cannot carry it through
+            raise ValueError(f"the latent denoiser's d_model ({d_model}) must be at least the latent width "
+                             f"({latent_dim}); raise latent.d_model or lower the VAEs' latent_dim")  # fmt: skip
         self.latent_tokens, self.previous_tokens, self.kinds = latent_tokens, previous_tokens, tuple(kinds)
         self.time = TimestepEmbedder(d_model)
         self.node_in = nn.Linear(node_dim, d_model)
