@@ -31,28 +31,28 @@ def build_text_table(cfg: DictConfig, dm: MotionDataModule):
     return cache.table(texts)
 
 
+def data_hparams(dm: MotionDataModule, name: str) -> dict:
+    """What a module must carry from its training data to generate without it: feature width and Mean/Std, length
+    limit, frame rate, joints, dataset name and representation."""
+    ds = dm.dataset("train")
+    return dict(feature_dim=dm.feature_dim, mean=ds.mean.tolist(), std=ds.std.tolist(), max_frames=dm.max_frames,
+                fps=dm.fps, num_joints=dm.num_joints, dataset=name, representation=dm.representation_spec())  # fmt: skip
+
+
 def build_module(cfg: DictConfig, dm: MotionDataModule) -> MotionDiffusionModule:
     kind = cfg.condition.kind
     action_names = list(getattr(dm, "action_names", None) or []) if kind == "action" else None
     if kind == "action" and not action_names:
         raise UsageError(f"dataset {cfg.dataset.name} has no action labels: use condition=text or condition=none")
-    ds = dm.dataset("train")
     return MotionDiffusionModule(
-        feature_dim=dm.feature_dim,
+        **data_hparams(dm, cfg.dataset.name),
         model=to_dict(cfg.model),
         backbone=to_dict(cfg.backbone),
         condition=to_dict(cfg.condition),
         diffusion=to_dict(cfg.diffusion),
         optim=to_dict(cfg.optim),
-        mean=ds.mean.tolist(),
-        std=ds.std.tolist(),
-        max_frames=dm.max_frames,
-        fps=dm.fps,
-        num_joints=dm.num_joints,
         action_names=action_names,
         text_encoder=to_dict(cfg.text_encoder) if kind == "text" else None,
-        dataset=cfg.dataset.name,
-        representation=dm.representation_spec(),
         loss=to_dict(cfg.loss),
         known_conditioning=to_dict(cfg.known_conditioning) if cfg.get("known_conditioning") else None,
     )

@@ -19,6 +19,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 
 from motiondiff.atomic import atomic_write
 from motiondiff.cli.common import UsageError, to_dict
+from motiondiff.cli.train import data_hparams
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.vae import LEVEL_TOKENS
@@ -41,21 +42,12 @@ def resolve_tokens(level: str | None, tokens: int | None) -> int:
 
 
 def build_module(cfg: DictConfig, dm: MotionDataModule, tokens: int) -> MotionVAEModule:
-    ds = dm.dataset("train")
-    vae = {**to_dict(cfg.vae), "tokens": tokens}
     return MotionVAEModule(
-        feature_dim=dm.feature_dim,
-        vae=vae,
+        **data_hparams(dm, cfg.dataset.name),
+        vae={**to_dict(cfg.vae), "tokens": tokens},
         optim=to_dict(cfg.optim),
-        mean=ds.mean.tolist(),
-        std=ds.std.tolist(),
-        max_frames=dm.max_frames,
-        fps=dm.fps,
-        num_joints=dm.num_joints,
         kl_weight=float(cfg.kl_weight),
         level=cfg.level,
-        dataset=cfg.dataset.name,
-        representation=dm.representation_spec(),
     )
 
 
