@@ -61,18 +61,15 @@ def generate_local_motions(
     generator: torch.Generator | None = None,
 ) -> list[list[torch.Tensor]]:
     """``candidates`` de-normalised motions (frames, D) per description from an MDM text model (DDIM)."""
-    from motiondiff.text.encoders import build_text_encoder
+    from motiondiff.cli.sample import condition_batch  # the one prompt -> condition path (encoder cached on mdm)
 
     if mdm.condition_kind != "text":
         raise LocalActionError("local actions are generated from text: local_model must be a text-conditioned model")
-    frames = min(int(frames), int(mdm.hparams.max_frames))
-    encoder = build_text_encoder(**{k: v for k, v in mdm.hparams.text_encoder.items() if k != "dim"})
-    features = mdm.prepare_text(encoder.encode(list(texts)))
+    lengths = torch.full((candidates,), min(int(frames), int(mdm.hparams.max_frames)))
+    scale = mdm.default_guidance if guidance is None else float(guidance)
     out = []
-    for k in range(len(texts)):
-        cond = features[k : k + 1].expand(candidates, -1)
-        lengths = torch.full((candidates,), frames)
-        scale = mdm.default_guidance if guidance is None else float(guidance)
+    for text in texts:
+        cond = condition_batch(mdm, [text] * candidates)
         feats = mdm.sample(cond, lengths, guidance=scale, sampler="ddim", steps=steps, generator=generator)
         out.append(list(mdm.denormalise(feats).float().cpu()))
     return out
