@@ -105,6 +105,28 @@ def test_latents_are_standardised_and_training_reaches_every_part(setup):
     assert not module.vaes.training
 
 
+def test_cached_latents_equal_fresh_encodings_and_key_on_the_window(setup):
+    module, batch = setup
+    module.latent_cache.clear()
+    first = module.batch_latents(batch)  # encodes and fills the cache
+    assert len(module.latent_cache) == len({(i, int(s), int(n)) for i, s, n in
+                                             zip(batch["id"], batch["start"], batch["length"])})  # fmt: skip
+    cached = module.batch_latents({**batch, "motion": torch.zeros_like(batch["motion"])})  # served from the cache
+    for level in ("motion", "action", "specific"):
+        fresh = module.encode(level, batch["motion"], batch["mask"])
+        assert torch.allclose(first[level], fresh) and torch.allclose(cached[level], fresh, atol=1e-6)
+    moved = {**batch, "start": batch["start"] + 1, "motion": torch.zeros_like(batch["motion"])}
+    other = module.batch_latents(moved)  # another window of the same clips is encoded, not looked up
+    assert not torch.allclose(other["action"], first["action"])
+    shifted = {**batch, "start": batch["start"] + 2}  # the same clips under other keys
+    module.set_latent_stats([shifted])  # new statistics: every latent cached before is dropped, these windows cached
+    assert set(module.latent_cache) == {(i, int(s), int(n)) for i, s, n in
+                                        zip(shifted["id"], shifted["start"], shifted["length"])}  # fmt: skip
+    restandardised = module.batch_latents(shifted)
+    assert torch.allclose(restandardised["action"].mean(0), torch.zeros(4, 16), atol=1e-5)
+    module.set_latent_stats([batch])
+
+
 def test_energy_guidance_pulls_the_action_latent_towards_a_local_action(setup):
     module, _ = setup
     graphs = module.graphs_of([CAPTIONS[0]])
@@ -119,6 +141,16 @@ def test_energy_guidance_pulls_the_action_latent_towards_a_local_action(setup):
         distances.append(float((latents["action"] - target[:, 0]).norm()))
         assert feats.shape == (1, 30, module.hparams.vaes["motion"]["feature_dim"])
     assert distances[0] > distances[1] > distances[2]
+    few = {"motion": 2, "action": 2, "specific": 2}
+    for level, levels in (("motion", {"motion"}), ("action", {"motion", "action"})):  # Tab. 4's ablation rows
+        feats, latents = module.sample(graphs, lengths, steps=few, final_level=level, return_latents=True,
+                                       generator=torch.Generator().manual_seed(0))  # fmt: skip
+        assert set(latents) == levels and feats.shape == (1, 30, module.hparams.vaes["motion"]["feature_dim"])
+        mean, std = module.latent_stats(level)
+        mask = torch.ones(1, 30, dtype=torch.bool)
+        assert torch.allclose(feats, module.vaes[level].decode(latents[level] * std + mean, mask), atol=1e-5)
+    with pytest.raises(ValueError, match="final_level"):
+        module.sample(graphs, lengths, steps=few, final_level="verb")
     with pytest.raises(ValueError, match="one per action node"):
         module.sample(graphs, lengths, steps={"motion": 2, "action": 2, "specific": 2}, local_latents=target[:, :1])
 

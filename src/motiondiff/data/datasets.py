@@ -91,6 +91,7 @@ class MotionDataset(Dataset):
             "text": text,
             "action": rec.action,
             "id": rec.id,
+            "start": start,  # with id and length, names the exact window (latent caches key on it)
         }
 
 
@@ -110,4 +111,5 @@ def collate_motion(items: list[dict]) -> dict:
         "text": [it["text"] for it in items],
         "action": torch.tensor([it["action"] for it in items], dtype=torch.long),
         "id": [it["id"] for it in items],
+        "start": torch.tensor([it.get("start", 0) for it in items], dtype=torch.long),
     }
