@@ -105,12 +105,15 @@ def test_latents_are_standardised_and_training_reaches_every_part(setup):
     assert not module.vaes.training
 
 
+def _window_keys(batch) -> set:
+    return {(i, int(s), int(n)) for i, s, n in zip(batch["id"], batch["start"], batch["length"], strict=True)}
+
+
 def test_cached_latents_equal_fresh_encodings_and_key_on_the_window(setup):
     module, batch = setup
     module.latent_cache.clear()
     first = module.batch_latents(batch)  # encodes and fills the cache
-    assert len(module.latent_cache) == len({(i, int(s), int(n)) for i, s, n in
-                                             zip(batch["id"], batch["start"], batch["length"])})  # fmt: skip
+    assert set(module.latent_cache) == _window_keys(batch)
     cached = module.batch_latents({**batch, "motion": torch.zeros_like(batch["motion"])})  # served from the cache
     for level in ("motion", "action", "specific"):
         fresh = module.encode(level, batch["motion"], batch["mask"])
@@ -120,8 +123,7 @@ def test_cached_latents_equal_fresh_encodings_and_key_on_the_window(setup):
     assert not torch.allclose(other["action"], first["action"])
     shifted = {**batch, "start": batch["start"] + 2}  # the same clips under other keys
     module.set_latent_stats([shifted])  # new statistics: every latent cached before is dropped, these windows cached
-    assert set(module.latent_cache) == {(i, int(s), int(n)) for i, s, n in
-                                        zip(shifted["id"], shifted["start"], shifted["length"])}  # fmt: skip
+    assert set(module.latent_cache) == _window_keys(shifted)
     restandardised = module.batch_latents(shifted)
     assert torch.allclose(restandardised["action"].mean(0), torch.zeros(4, 16), atol=1e-5)
     module.set_latent_stats([batch])
