@@ -74,3 +74,26 @@ def test_bad_local_action_input_is_one_clear_error(latent_ckpt, overrides, messa
                    "level_steps=[2,2,2]", "export=none", *overrides, env_dir=work, check=False)  # fmt: skip
     assert proc.returncode == 2, proc.stderr[-2000:]
     assert message in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_comparison_with_mdm_and_the_level_ablation_writes_every_row(latent_ckpt):
+    from motiondiff.eval.guided_compare import ABLATION, main
+
+    work, ckpt = latent_ckpt
+    out = work / "comparison"
+    main([f"latent={ckpt}", "mdm=shipped", "replications=2", "level_steps=2,2,2", "mdm_steps=2", "local_frames=20",
+          "timing_repeats=1", f"out={out}"])  # fmt: skip
+    result = json.loads(out.with_suffix(".json").read_text())
+    assert set(result["summaries"]) == {*ABLATION, result["mdm_row"]}
+    for name, summary in result["summaries"].items():
+        for metric in ("fid", "r_precision_top3", "mm_dist", "diversity"):
+            mean, ci, n = summary[metric]
+            assert np.isfinite(mean) and np.isfinite(ci) and n == 2, (name, metric)
+    rows = result["replications_raw"]  # guidance and the decoding level change what is generated
+    assert rows["all three levels"][0]["fid"] != rows["GuidedMotion (all levels + guidance)"][0]["fid"]
+    assert rows["motion level"][0]["fid"] != rows["all three levels"][0]["fid"]
+    assert result["clips"] == 64 and result["times"]["local_actions"] >= 3
+    assert all(result["times"][k] > 0 for k in ("guidedmotion_latent_s", "guidedmotion_local_actions_s", "mdm_s"))
+    assert result["training"]["GuidedMotion latent stage"] != "unknown"
+    text = out.with_suffix(".md").read_text()
+    assert "Ablation (paper Tab. 4 style)" in text and "Sampling time per motion" in text
