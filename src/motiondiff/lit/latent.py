@@ -23,6 +23,13 @@ from motiondiff.models.hierarchical import LEVELS, PREVIOUS, HierarchicalDenoise
 from motiondiff.text.parse import ROLES
 
 
+def window_keys(batch: dict) -> list[tuple[str, int, int]] | None:
+    """(clip id, window start, length) of each batch item, the key of ``latent_cache``; None without them."""
+    if not all(k in batch for k in ("id", "start", "length")):
+        return None
+    return [(i, int(s), int(n)) for i, s, n in zip(batch["id"], batch["start"], batch["length"], strict=True)]
+
+
 class HierarchicalLatentModule(L.LightningModule):
     def __init__(
         self,
@@ -111,21 +118,20 @@ class HierarchicalLatentModule(L.LightningModule):
             getattr(self, f"latent_std_{level}").copy_(latents.std(0).clamp_min(1e-4))
         self.latent_cache.clear()
         for i, b in enumerate(batches):
-            if all(k in b for k in ("id", "start", "length")):
+            keys = window_keys(b)
+            if keys is not None:
                 standardised = {level: (raw[level][i] - self.latent_stats(level)[0]) / self.latent_stats(level)[1]
                                 for level in LEVELS}  # fmt: skip
-                for row, key in enumerate(zip(b["id"], b["start"].tolist(), b["length"].tolist(), strict=True)):
+                for row, key in enumerate(keys):
                     self.latent_cache[key] = {level: standardised[level][row].cpu() for level in LEVELS}
 
     def batch_latents(self, batch: dict) -> dict[str, torch.Tensor]:
         """Each level's standardised latents of a batch's windows, from ``latent_cache`` when every window is in it;
         batches without window keys (``id``/``start``/``length``) are encoded afresh."""
-        keys = None
-        if all(k in batch for k in ("id", "start", "length")):
-            keys = [(i, int(s), int(n)) for i, s, n in zip(batch["id"], batch["start"], batch["length"], strict=True)]
-            if all(k in self.latent_cache for k in keys):
-                return {level: torch.stack([self.latent_cache[k][level] for k in keys]).to(self.device)
-                        for level in LEVELS}  # fmt: skip
+        keys = window_keys(batch)
+        if keys is not None and all(k in self.latent_cache for k in keys):
+            return {level: torch.stack([self.latent_cache[k][level] for k in keys]).to(self.device)
+                    for level in LEVELS}  # fmt: skip
         latents = {level: self.encode(level, batch["motion"], batch["mask"]) for level in LEVELS}
         if keys is not None:
             for i, k in enumerate(keys):
