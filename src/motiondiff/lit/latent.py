@@ -205,6 +205,8 @@ class HierarchicalLatentModule(L.LightningModule):
         the user's w_k (default 1). Without them the action level samples with no energy guidance.
         ``final_level`` stops the hierarchy early and decodes that level's latent with its own VAE (the paper's
         Tab. 4 ablation: motion level alone, motion + action, all three)."""
+        if final_level not in LEVELS:
+            raise ValueError(f"final_level must be one of {', '.join(LEVELS)}, got {final_level!r}")
         self.eval()
         settings = dict(self.hparams.sampling or {})
         scale = float(settings.get("guidance", 7.5) if guidance is None else guidance)
@@ -217,8 +219,6 @@ class HierarchicalLatentModule(L.LightningModule):
         hook = None
         if local_latents is not None:
             hook = self._energy_hook(graphs, attention, local_latents.to(self.device), local_weights, rho)
-        if final_level not in LEVELS:
-            raise ValueError(f"final_level must be one of {', '.join(LEVELS)}, got {final_level!r}")
         latents = {}
         for level in LEVELS[: LEVELS.index(final_level) + 1]:
             previous = latents[PREVIOUS[level]] if PREVIOUS[level] else None
