@@ -97,3 +97,33 @@ def test_comparison_with_mdm_and_the_level_ablation_writes_every_row(latent_ckpt
     assert result["training"]["GuidedMotion latent stage"] != "unknown"
     text = out.with_suffix(".md").read_text()
     assert "Ablation (paper Tab. 4 style)" in text and "Sampling time per motion" in text
+
+
+def test_timing_only_writes_the_sampling_times_and_leaves_the_comparison_alone(latent_ckpt):
+    from motiondiff.eval.guided_compare import main
+
+    work, ckpt = latent_ckpt
+    out = work / "timing"
+    main([f"latent={ckpt}", "mdm=shipped", "timing_only=true", "level_steps=2,2,2", "mdm_steps=2", "local_frames=20",
+          "timing_repeats=1", f"out={out}"])  # fmt: skip
+    assert not out.with_suffix(".md").exists()
+    result = json.loads((work / "timing_timing.json").read_text())
+    times = result["times"]
+    assert times["threads"] == torch.get_num_threads() and times["local_actions"] >= 3
+    assert all(times[k] > 0 for k in ("guidedmotion_latent_s", "guidedmotion_local_actions_s", "mdm_s"))
+    assert "torch thread" in (work / "timing_timing.md").read_text()
+
+
+def test_weight_control_report_measures_latent_and_decoded_distances(latent_ckpt):
+    from motiondiff.eval.weight_control import main
+
+    work, ckpt = latent_ckpt
+    out = work / "weights"
+    main([f"checkpoint={ckpt}", "captions=2", "samples=1", "weights=0,2", "level_steps=2,2,2", f"out={out}"])
+    result = json.loads(out.with_suffix(".json").read_text())
+    assert [c["weight"] for c in result["curve"]] == [0.0, 2.0] and len(result["captions"]) == 2
+    for row in result["captions"][0]["rows"]:
+        assert len(row["latent_distance"]) == len(row["motion_distance"]) == len(row["root_travel_m"]) == 1
+    rows = result["captions"][0]["rows"]  # the weight changes what is sampled from the same noise
+    assert rows[0]["latent_distance"] != rows[1]["latent_distance"]
+    assert out.with_suffix(".png").stat().st_size > 0 and "evaluator distance" in out.with_suffix(".md").read_text()

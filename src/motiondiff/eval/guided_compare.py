@@ -3,14 +3,15 @@
 
     python -m motiondiff.eval.guided_compare latent=<train_latent.py ckpt> mdm=<train.py ckpt>
         [local_model=<ckpt>] [replications=5] [level_steps=15,15,20] [mdm_steps=50] [local_frames=60]
-        [timing_repeats=5] [seed=0] [out=<prefix>] [data=<prepared dir>] [evaluators=<dir>]
+        [timing_repeats=5] [timing_only=false] [seed=0] [out=<prefix>] [data=<prepared dir>] [evaluators=<dir>]
 
 Every row samples the same test captions at the real clips' lengths, and goes through the same evaluators
 (`checkpoints/evaluators/bandai_mini_compositional`): R-precision, FID, MM-Dist and Diversity, mean ± 95% CI over
 the replications (new noise and new local actions each time). The local actions of the guided rows are generated
 by ``local_model`` (default: the compared MDM model itself, so GuidedMotion uses no model that MDM lacks); their
 descriptions come from each caption's semantic graph. Writes <out>.md and <out>.json
-(default docs/results/guidedmotion/comparison).
+(default docs/results/guidedmotion/comparison); ``timing_only=true`` measures only the sampling times, into
+<out>_timing.md/.json. Times use the process's torch threads (set OMP_NUM_THREADS to compare machines).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from motiondiff.cli.common import REPO_DIR, UsageError, key_value_args, text_enc
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
 
 KEYS = ("latent", "mdm", "local_model", "replications", "level_steps", "mdm_steps", "local_frames",
-        "timing_repeats", "seed", "out", "data", "evaluators")  # fmt: skip
+        "timing_repeats", "timing_only", "seed", "out", "data", "evaluators")  # fmt: skip
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "comparison"
 # Tab. 4's rows: (level the hierarchy stops at and decodes, local-action energy guidance on)
 ABLATION = {
@@ -140,6 +141,7 @@ def sampling_times(latent, mdm, local_mdm, table, caption: str, frames: int, arg
     }
     times["guidedmotion_total_s"] = times["guidedmotion_latent_s"] + times["guidedmotion_local_actions_s"]
     times["local_actions"] = len(graph.action_ids())
+    times["threads"] = torch.get_num_threads()
     return times
 
 
@@ -147,6 +149,33 @@ def training_seconds(checkpoint: Path) -> dict | None:
     """run.json of the training run that wrote ``checkpoint`` (<run>/checkpoints/<file>), if there is one."""
     meta = checkpoint.resolve().parent.parent / "run.json"
     return json.loads(meta.read_text()) if meta.is_file() else None
+
+
+def timing_lines(times: dict, meta: dict) -> list[str]:
+    return [
+        f"### Sampling time per motion ({times['frames']} frames, guidance on; median of {meta['timing_repeats']}; "
+        f"{times['threads']} torch thread{'s' if times['threads'] > 1 else ''})",
+        "",
+        "| what | seconds |",
+        "|---|---:|",
+        f"| GuidedMotion latent sampling, {meta['level_steps_text']} level steps (50 in all) + VAE decoding | "
+        f"{times['guidedmotion_latent_s']:.3f} |",
+        f"| GuidedMotion local actions: {times['local_actions']} MDM motions (DDIM-{meta['mdm_steps']}, one batch) "
+        f"+ action-VAE encoding | {times['guidedmotion_local_actions_s']:.3f} |",
+        f"| GuidedMotion in all | {times['guidedmotion_total_s']:.3f} |",
+        f"| MDM, DDIM-{meta['mdm_steps']} | {times['mdm_s']:.3f} |",
+        "",
+    ]
+
+
+def write_timing(out: Path, times: dict, meta: dict) -> None:
+    """``timing_only=true``: the sampling times alone, in <out>_timing.md/.json (the comparison files stay)."""
+    out = out.with_name(out.name + "_timing")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    lines = ["# GuidedMotion vs MDM: sampling time per motion", "", f"Latent model `{meta['latent']}`; MDM `{meta['mdm']}`.",
+             "", *timing_lines(times, meta), f"Command: `{meta['command']}`", ""]  # fmt: skip
+    write_markdown(out.with_suffix(".md"), "\n".join(lines))
+    out.with_suffix(".json").write_text(json.dumps({**meta, "times": times}, indent=1))
 
 
 def write(out: Path, rows: dict, times: dict, meta: dict) -> None:
@@ -167,17 +196,7 @@ def write(out: Path, rows: dict, times: dict, meta: dict) -> None:
         "",
         *[f"- {k}: {v}" for k, v in meta["training"].items()],
         "",
-        f"### Sampling time per motion ({times['frames']} frames, guidance on; median of {meta['timing_repeats']})",
-        "",
-        "| what | seconds |",
-        "|---|---:|",
-        f"| GuidedMotion latent sampling, {meta['level_steps_text']} level steps (50 in all) + VAE decoding | "
-        f"{times['guidedmotion_latent_s']:.3f} |",
-        f"| GuidedMotion local actions: {times['local_actions']} MDM motions (DDIM-{meta['mdm_steps']}, one batch) "
-        f"+ action-VAE encoding | {times['guidedmotion_local_actions_s']:.3f} |",
-        f"| GuidedMotion in all | {times['guidedmotion_total_s']:.3f} |",
-        f"| MDM, DDIM-{meta['mdm_steps']} | {times['mdm_s']:.3f} |",
-        "",
+        *timing_lines(times, meta),
         f"Command: `{meta['command']}`",
         "",
     ]
@@ -228,8 +247,9 @@ def main(argv: list[str] | None = None) -> int:
     evaluators = Evaluators.load(evaluator_dir).for_module(mdm)
     encoder = build_text_encoder(**text_encoder_kwargs(latent.hparams.text_encoder))
     table = graph_table([c for caps in clips.captions for c in caps], encoder)
+    timing_only = args.get("timing_only", "false").lower() in ("1", "true", "yes")
     rows: dict[str, list[dict]] = {}
-    for r in range(settings["replications"]):
+    for r in range(0 if timing_only else settings["replications"]):
         start = time.perf_counter()
         for name, metrics in replication(latent, mdm, local_mdm, evaluators, clips, table, r, settings).items():
             rows.setdefault(name, []).append(metrics)
@@ -249,6 +269,10 @@ def main(argv: list[str] | None = None) -> int:
             "level_steps_text": "/".join(str(v) for v in settings["level_steps"].values()),
             "command": "python -m motiondiff.eval.guided_compare " + " ".join(argv)}  # fmt: skip
     out = Path(args.get("out", DEFAULT_OUT))
+    if timing_only:
+        write_timing(out, times, meta)
+        print(json.dumps(times, indent=1))
+        return 0
     write(out, rows, times, meta)
     print(Path(out.with_suffix(".md")).read_text())
     return 0

@@ -1,7 +1,8 @@
 """Does a local action's weight control GuidedMotion? (issue 7: "weight control works")
 
     python -m motiondiff.eval.weight_control checkpoint=<train_latent.py ckpt> [local_model=shipped] [captions=20]
-        [weights=0,0.5,1,1.5,2] [samples=2] [level_steps=15,15,20] [seed=0] [out=<prefix>]
+        [weights=0,0.5,1,1.5,2] [samples=2] [level_steps=15,15,20] [rho=0.01] [final_level=specific] [seed=0]
+        [out=<prefix>]
 
 For each of ``captions`` captions of the complex-motion test split (generated captions of joined real clips), the
 local actions are generated once by ``local_model``; the guided action is the first one whose description walks
@@ -21,9 +22,11 @@ import numpy as np
 import torch
 
 from motiondiff.cli.common import REPO_DIR, UsageError, find_checkpoint, key_value_args, text_encoder_kwargs
+from motiondiff.diffusion.energy_guidance import DEFAULT_RHO
 from motiondiff.eval.report import mean_ci
 
-KEYS = ("checkpoint", "local_model", "captions", "weights", "samples", "level_steps", "seed", "out", "data")
+KEYS = ("checkpoint", "local_model", "captions", "weights", "samples", "level_steps", "rho", "final_level", "seed", "out",
+        "data")  # fmt: skip
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "weight_control"
 MOVING = ("walk", "run", "dash", "jog", "step")
 FRAMES = 160  # 8 s at 20 fps: long enough for three local actions, within the complex split's 150-196 frames
@@ -38,24 +41,29 @@ def root_travel(joints: np.ndarray) -> float:
     return float(np.linalg.norm(joints[-1, 0, [0, 2]] - joints[0, 0, [0, 2]]))
 
 
-def run_caption(module, mdm, encoder, text, frames, weights, samples, steps, seed):
+def run_caption(module, mdm, encoder, evaluators, text, frames, weights, samples, steps, seed, **sample_kwargs):
     from motiondiff.guided.local_actions import guided_sample, local_actions_for
 
     gen = torch.Generator().manual_seed(seed)
     graph, local = local_actions_for(module, text, mdm=mdm, frames=frames, generator=gen)
     k = guided_index(local.texts)
+    local_feats = local.motions[k].to(module.device)
+    local_embedding = evaluators.embed_motion([local_feats.cpu().numpy()])["text_motion"]
     rows = []
     for w in weights:
         user = [1.0] * len(local.texts)
         user[k] = float(w)
         feats, latents = guided_sample(module, graph, encoder, local, torch.full((samples,), frames), weights=user,
                                        steps=steps, generator=torch.Generator().manual_seed(seed + 1),
-                                       return_latents=True)  # fmt: skip
+                                       return_latents=True, **sample_kwargs)  # fmt: skip
         distance = (latents["action"] - local.latents[k]).flatten(1).norm(dim=1)
-        joints = module.joints(module.denormalise(feats)).cpu().numpy()
+        decoded = module.denormalise(feats)
+        joints = module.joints(decoded).cpu().numpy()
+        embedding = evaluators.embed_motion(list(decoded.cpu().numpy()))["text_motion"]
         rows.append({"weight": float(w), "latent_distance": distance.tolist(),
-                     "root_travel_m": [root_travel(j) for j in joints]})  # fmt: skip
-    local_joints = module.joints(local.motions[k][None].to(module.device)).cpu().numpy()[0]
+                     "root_travel_m": [root_travel(j) for j in joints],
+                     "motion_distance": np.linalg.norm(embedding - local_embedding, axis=1).tolist()})  # fmt: skip
+    local_joints = module.joints(local_feats[None]).cpu().numpy()[0]
     return {"text": text, "local_actions": local.texts, "guided": k, "guided_text": local.texts[k],
             "guided_local_root_travel_m": root_travel(local_joints), "rows": rows}  # fmt: skip
 
@@ -66,15 +74,26 @@ def summarise(results: list[dict], weights: list[float]) -> dict:
         dist = [float(np.mean(r["rows"][i]["latent_distance"])) for r in results]
         walking = [float(np.mean(r["rows"][i]["root_travel_m"])) for r in results
                    if any(m in r["guided_text"].lower() for m in MOVING)]  # fmt: skip
+        motion = [float(np.mean(r["rows"][i]["motion_distance"])) for r in results if "motion_distance" in r["rows"][i]]
         curve.append({"weight": w, "latent_distance": mean_ci(dist), "root_travel_m": mean_ci(walking) if walking else None,
-                      "walking_captions": len(walking)})  # fmt: skip
+                      "walking_captions": len(walking), "motion_distance": mean_ci(motion) if motion else None})  # fmt: skip
     means = [c["latent_distance"][0] for c in curve]
     monotone = all(a > b for a, b in zip(means, means[1:], strict=False))
     per_caption = sum(
-        all(np.mean(a["latent_distance"]) > np.mean(b["latent_distance"]) for a, b in zip(r["rows"], r["rows"][1:], strict=False))
-        for r in results
-    )  # fmt: skip
-    return {"curve": curve, "mean_distance_decreases_monotonically": monotone, "captions_monotone": per_caption}
+        bool(np.all(np.diff([np.mean(row["latent_distance"]) for row in r["rows"]]) < 0)) for r in results
+    )
+    walking = [r for r in results if any(m in r["guided_text"].lower() for m in MOVING)]
+
+    def gap(r, row):  # |decoded travel - the local motion's own travel|
+        return abs(np.mean(r["rows"][row]["root_travel_m"]) - r["guided_local_root_travel_m"])
+
+    toward = sum(bool(gap(r, -1) < gap(r, 0)) for r in walking)
+    local_travel = mean_ci([r["guided_local_root_travel_m"] for r in walking]) if walking else None
+    closer = sum(bool(np.mean(r["rows"][-1]["motion_distance"]) < np.mean(r["rows"][0]["motion_distance"]))
+                 for r in results if "motion_distance" in r["rows"][0])  # fmt: skip
+    return {"captions_decoded_closer": closer, "curve": curve, "mean_distance_decreases_monotonically": monotone, "captions_monotone": per_caption,
+            "walking_captions_toward_local": toward, "walking_captions": len(walking),
+            "guided_local_root_travel_m": local_travel}  # fmt: skip
 
 
 def write(out: Path, meta: dict, results: list[dict], summary: dict) -> None:
@@ -87,25 +106,44 @@ def write(out: Path, meta: dict, results: list[dict], summary: dict) -> None:
     out.with_suffix(".json").write_text(json.dumps({**meta, **summary, "captions": results}, indent=1))
     lines = [f"# GuidedMotion weight control ({len(results)} captions)", "",
              f"Checkpoint: `{meta['checkpoint']}`; local actions by `{meta['local_model']}`; level steps {meta['level_steps']}; "
-             f"{meta['samples']} samples per caption and weight; seed {meta['seed']}. Captions are **generated** (joined real clips).", "",
-             "| weight | latent distance to c^k (mean ± 95% CI) | root travel of walking guided actions (m) |", "|---:|---:|---:|"]  # fmt: skip
+             f"{meta['samples']} samples per caption and weight; rho {meta['rho']:g}; decoded from the {meta['final_level']} "
+             f"level; seed {meta['seed']}. Captions are **generated** (joined real clips).", "",
+             "| weight | latent distance to c^k (mean ± 95% CI) | decoded motion's evaluator distance to the local motion "
+             "| root travel of walking guided actions (m) |", "|---:|---:|---:|---:|"]  # fmt: skip
     for c in summary["curve"]:
         travel = (
             "–"
             if c["root_travel_m"] is None
             else f"{c['root_travel_m'][0]:.2f} ± {c['root_travel_m'][1]:.2f} ({c['walking_captions']})"
         )
-        lines.append(f"| {c['weight']:g} | {c['latent_distance'][0]:.3f} ± {c['latent_distance'][1]:.3f} | {travel} |")
+        motion = (
+            "–" if c["motion_distance"] is None else f"{c['motion_distance'][0]:.3f} ± {c['motion_distance'][1]:.3f}"
+        )
+        lines.append(
+            f"| {c['weight']:g} | {c['latent_distance'][0]:.3f} ± {c['latent_distance'][1]:.3f} | {motion} | {travel} |"
+        )
     lines += ["", f"Mean distance decreases monotonically: **{summary['mean_distance_decreases_monotonically']}**; "
-              f"captions whose own curve is monotone: {summary['captions_monotone']} of {len(results)}.", ""]  # fmt: skip
+              f"captions whose own curve is monotone: {summary['captions_monotone']} of {len(results)}.", "",
+              f"Decoded motions closer to the guided local motion (text-motion evaluator's motion embedding) at weight "
+              f"{summary['curve'][-1]['weight']:g} than at {summary['curve'][0]['weight']:g}: "
+              f"**{summary['captions_decoded_closer']} of {len(results)}** captions.", ""]  # fmt: skip
+    if summary["walking_captions"]:
+        travel, ci = summary["guided_local_root_travel_m"]
+        lines += [f"Walking guided actions: their local motions travel {travel:.2f} ± {ci:.2f} m; raising the weight "
+                  f"0 → {summary['curve'][-1]['weight']:g} moves the decoded root travel towards it in "
+                  f"**{summary['walking_captions_toward_local']} of {summary['walking_captions']}** captions.", ""]  # fmt: skip
     out.with_suffix(".md").write_text("\n".join(lines))
-    fig, ax = plt.subplots(figsize=(5, 3.5))
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.5))
     w = [c["weight"] for c in summary["curve"]]
-    m = np.array([c["latent_distance"] for c in summary["curve"]])
-    ax.errorbar(w, m[:, 0], yerr=m[:, 1], marker="o", capsize=3)
-    ax.set_xlabel("weight w_k of the guided local action")
-    ax.set_ylabel("‖z^a − c^k‖ (standardised)")
-    ax.set_title("GuidedMotion: local-action weight control")
+    for ax, key, label in ((axes[0], "latent_distance", "‖z^a − c^k‖ (standardised)"),
+                           (axes[1], "motion_distance", "evaluator distance, decoded ↔ local motion")):  # fmt: skip
+        if summary["curve"][0][key] is None:
+            continue
+        m = np.array([c[key] for c in summary["curve"]])
+        ax.errorbar(w, m[:, 0], yerr=m[:, 1], marker="o", capsize=3)
+        ax.set_xlabel("weight w_k of the guided local action")
+        ax.set_ylabel(label)
+    fig.suptitle("GuidedMotion: local-action weight control")
     fig.tight_layout()
     fig.savefig(out.with_suffix(".png"), dpi=120)
     plt.close(fig)
@@ -114,6 +152,7 @@ def write(out: Path, meta: dict, results: list[dict], summary: dict) -> None:
 def main(argv: list[str] | None = None) -> int:
     from motiondiff.cli.sample import load_module
     from motiondiff.data.datamodules import PreparedDataModule
+    from motiondiff.eval.protocol import Evaluators
     from motiondiff.lit.latent import HierarchicalLatentModule
     from motiondiff.text.encoders import build_text_encoder
 
@@ -126,20 +165,29 @@ def main(argv: list[str] | None = None) -> int:
     module = HierarchicalLatentModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
     mdm = load_module(find_checkpoint(args.get("local_model", "shipped"), REPO_DIR / "outputs"))
     encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
+    data = Path(args.get("data", REPO_DIR / "data" / "bandai_mini_compositional"))
+    evaluators = Evaluators.load(REPO_DIR / "checkpoints" / "evaluators" / data.name).for_module(mdm)
     weights = [float(w) for w in args.get("weights", "0,0.5,1,1.5,2").split(",")]
     steps = dict(
         zip(("motion", "action", "specific"), map(int, args.get("level_steps", "15,15,20").split(",")), strict=True)
     )
     seed, samples = int(args.get("seed", 0)), int(args.get("samples", 2))
-    dm = PreparedDataModule(args.get("data", REPO_DIR / "data" / "bandai_mini_compositional"), max_frames=196)
+    final_level = args.get("final_level", "specific")
+    if final_level not in ("action", "specific"):
+        raise UsageError(
+            f"final_level must be action or specific (the guided action latent must exist), got {final_level!r}"
+        )
+    sample_kwargs = {"rho": float(args.get("rho", DEFAULT_RHO)), "final_level": final_level}
+    dm = PreparedDataModule(data, max_frames=196)
     dm.setup("test")
     records = dm.dataset("test").records[: int(args.get("captions", 20))]
     results = []
     for i, rec in enumerate(records):
-        results.append(run_caption(module, mdm, encoder, rec.texts[0], FRAMES, weights, samples, steps, seed + i))
+        results.append(run_caption(module, mdm, encoder, evaluators, rec.texts[0], FRAMES, weights, samples, steps, seed + i,
+                                   **sample_kwargs))  # fmt: skip
         print(f"[{i + 1}/{len(records)}] {rec.texts[0][:70]!r}: guided {results[-1]['guided_text']!r}", flush=True)
     meta = {"checkpoint": str(ckpt), "local_model": args.get("local_model", "shipped"), "weights": weights,
-            "samples": samples, "level_steps": steps, "seed": seed}  # fmt: skip
+            "samples": samples, "level_steps": steps, "seed": seed, **sample_kwargs}  # fmt: skip
     summary = summarise(results, weights)
     out = Path(args.get("out", DEFAULT_OUT))
     write(out, meta, results, summary)
