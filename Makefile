@@ -12,7 +12,7 @@ export HF_HOME := $(CURDIR)/.cache/huggingface
 export HF_HUB_OFFLINE := 1
 export TRANSFORMERS_OFFLINE := 1
 
-.PHONY: setup train test lint format data lock clean
+.PHONY: setup train test bench lint format data lock clean
 
 setup: $(VENV)/.installed
 
@@ -47,6 +47,11 @@ browser:
 		  { apt-get update -qq && apt-get install -y -qq chromium >/dev/null; } ) || \
 			echo "note: could not install chromium; the HTML viewer screenshot test will skip"; \
 	else echo "note: no chromium and no root apt-get; the HTML viewer screenshot test will skip"; fi
+
+# Time training, the forward pass, sampling and text encoding on this machine (<= 10 min on 2 cores); writes
+# bench/results/latest.{json,md}. Run it on an otherwise idle machine: other work skews every row.
+bench: setup
+	$(PY) bench/run.py
 
 lint: setup
 	$(VENV)/bin/ruff check src tests

@@ -142,6 +142,8 @@ def run(cfg: DictConfig) -> Path:
     trainer.fit(module, datamodule=dm, ckpt_path=ckpt)
     seconds = time.perf_counter() - start  # wall time of fit (evaluation callbacks included): equal-time comparisons
     last = out / "checkpoints" / "last.ckpt"
+    if not trainer.is_global_zero:  # DDP: the other processes only train; rank 0 writes and evaluates
+        return last
     meta = {"train_steps": trainer.global_step, "train_seconds": round(seconds, 1),
             "overrides": list(HydraConfig.get().overrides.task)}  # fmt: skip
     atomic_write(out / "run.json", lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)))

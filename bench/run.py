@@ -1,0 +1,40 @@
+"""`make bench`: time training, the forward pass, sampling and text encoding on this machine, in one process.
+
+    python bench/run.py [--quick] [--model shipped|<ckpt>] [--out bench/results/latest]
+
+Writes <out>.json (medians in seconds; keys such as train_step_paper_bs64_s and sample_one_motion_default_s, and
+every row with its repeats and peak memory) and <out>.md (the table with the machine description).
+See motiondiff.bench.suite for what each row measures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from motiondiff.atomic import atomic_write
+from motiondiff.bench.report import markdown
+from motiondiff.bench.suite import run_suite
+
+DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "latest"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="tiny sizes and one repeat (a smoke test, not numbers)")
+    parser.add_argument("--model", default="shipped", help="model to sample with: shipped, latest or a checkpoint")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output prefix (.json and .md are written)")
+    args = parser.parse_args(argv)
+    command = "python bench/run.py " + " ".join(argv if argv is not None else sys.argv[1:])
+    result = run_suite(quick=args.quick, model=args.model, command=command.strip())
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(args.out.with_suffix(".json"), lambda tmp: Path(tmp).write_text(json.dumps(result, indent=1)))
+    atomic_write(args.out.with_suffix(".md"), lambda tmp: Path(tmp).write_text(markdown(result)))
+    print(markdown(result))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,49 @@
+"""Where a benchmark ran (the numbers mean nothing without it) and its Markdown table."""
+
+from __future__ import annotations
+
+import os
+import platform
+
+import torch
+
+from motiondiff.hardware import cpu_has_fast_bf16
+
+
+def cpu_model() -> str:
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def machine() -> dict:
+    return {"cpu": cpu_model(), "cores": os.cpu_count(), "torch_threads": torch.get_num_threads(),
+            "torch": torch.__version__, "cpu_capability": torch.backends.cpu.get_cpu_capability(),
+            "native_bf16": cpu_has_fast_bf16(), "python": platform.python_version(), "platform": platform.platform()}  # fmt: skip
+
+
+def markdown(result: dict) -> str:
+    m = result["machine"]
+    lines = [
+        "# motiondiff benchmark",
+        "",
+        f"{m['cpu']}, {m['cores']} cores, {m['torch_threads']} torch threads, torch {m['torch']} "
+        f"({m['cpu_capability']}; native bf16: {m['native_bf16']}). `{result['command']}`, {result['date']}, "
+        f"{result['wall_s']:.0f} s in all. Medians over repeats after a warm-up.",
+        "",
+        "| what | median | detail |",
+        "|---|---:|---|",
+    ]
+    for row in result["rows"]:
+        lines.append(f"| {row['name']} | {format_seconds(row['median_s'])} | {row.get('detail', '')} |")
+    lines += ["", *[f"- {note}" for note in result.get("notes", [])], ""]
+    return "\n".join(lines)
+
+
+def format_seconds(s: float) -> str:
+    return f"{s * 1e3:.2f} ms" if s < 1 else f"{s:.2f} s"

@@ -1,0 +1,117 @@
+"""The measured pieces of work: a training step of the MDM denoiser, its forward pass, sampling one or many motions
+with each sampler, and text encoding. Training and forward use random features of the HumanML3D width and random
+caption features (no text encoder runs in a training step: the project looks captions up in a pre-computed table);
+sampling uses a real model (the shipped one by default) and a real prompt."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable
+
+import torch
+
+from motiondiff.diffusion import GaussianDiffusion, make_betas
+from motiondiff.models.denoiser import PRESETS, MDMDenoiser
+
+FEATURE_DIM = 263  # HumanML3D features
+COND_DIM = 384  # MiniLM sentence features (the project's default text encoder)
+PROMPT = "a person walks forward and waves both hands"
+
+
+def autocast(bf16: bool):
+    return torch.autocast("cpu", dtype=torch.bfloat16) if bf16 else contextlib.nullcontext()
+
+
+def build_denoiser(preset: str | dict, seed: int = 0) -> MDMDenoiser:
+    torch.manual_seed(seed)
+    return MDMDenoiser.from_config(FEATURE_DIM, preset=PRESETS[preset] if isinstance(preset, str) else preset,
+                                   cond_dim=COND_DIM)  # fmt: skip
+
+
+def random_batch(batch: int, frames: int, seed: int = 0) -> dict[str, torch.Tensor]:
+    g = torch.Generator().manual_seed(seed)
+    return {"x0": torch.randn(batch, frames, FEATURE_DIM, generator=g),
+            "cond": torch.randn(batch, COND_DIM, generator=g), "mask": torch.ones(batch, frames, dtype=torch.bool)}  # fmt: skip
+
+
+def train_step(preset: str | dict, batch: int, frames: int, bf16: bool = False) -> Callable[[], float]:
+    """One MDM training step as train.py runs it: q_sample at random t, 10% condition drop, x0 loss, backward,
+    gradient clipping at 1.0 and AdamW."""
+    model = build_denoiser(preset).train()
+    diffusion = GaussianDiffusion(make_betas("cosine", 1000), prediction="x0")
+    opt = torch.optim.AdamW(model.parameters(), lr=1e-4)
+    data = random_batch(batch, frames)
+
+    def step() -> float:
+        x0, mask = data["x0"], data["mask"]
+        t = torch.randint(0, diffusion.num_steps, (batch,))
+        noise = torch.randn_like(x0)
+        with autocast(bf16):
+            out = model(diffusion.q_sample(x0, t, noise), t, cond=data["cond"], mask=mask,
+                        drop_cond=torch.rand(batch) < 0.1)  # fmt: skip
+            loss = diffusion.loss(out, x0, noise, t, mask=mask)
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
+        opt.step()
+        return float(loss.detach())
+
+    return step
+
+
+def forward(preset: str | dict, batch: int, frames: int, bf16: bool = False) -> Callable[[], torch.Tensor]:
+    """The denoiser's inference forward (eval mode: PyTorch's fused encoder path), as each sampling step runs it."""
+    model = build_denoiser(preset).eval()
+    data = random_batch(batch, frames)
+    t = torch.full((batch,), 500)
+
+    @torch.inference_mode()
+    def run() -> torch.Tensor:
+        with autocast(bf16):
+            return model(data["x0"], t, cond=data["cond"], mask=data["mask"])
+
+    return run
+
+
+class _Stop(Exception):
+    pass
+
+
+def sampling(module, count: int, frames: int, sampler: str, steps: int | None, guidance: float,
+             timed_steps: int | None = None) -> tuple[Callable[[], object], int, int]:  # fmt: skip
+    """``count`` motions of ``frames`` frames from PROMPT. Returns (run, steps_total, steps_run): when ``timed_steps``
+    is below the chain's length the run stops after that many steps (the caller scales the time: every step of a
+    chain costs the same forward), so DDPM-1000 at batch 32 fits the bench's time budget."""
+    from motiondiff.cli.sample import condition_batch
+    from motiondiff.diffusion.samplers import select_timesteps
+
+    cond = condition_batch(module, [PROMPT] * count)  # encoded once, then cached: not part of the timing
+    lengths = torch.full((count,), frames)
+    total = len(select_timesteps(module.diffusion.num_steps, steps if sampler == "ddpm" else steps or 50))
+    limit = total if timed_steps is None else min(total, timed_steps)
+    done = [0]
+
+    def stop_after(x, t_next):
+        done[0] += 1
+        if done[0] >= limit and limit < total:
+            raise _Stop
+        return x
+
+    def run():
+        done[0] = 0
+        with contextlib.suppress(_Stop):
+            module.sample(cond, lengths, guidance=guidance, sampler=sampler, steps=steps,
+                          xt_hook=stop_after if limit < total else None)  # fmt: skip
+
+    return run, total, limit
+
+
+def text_encoding(encoder_kwargs: dict) -> tuple[Callable[[], object], Callable[[], object]]:
+    """(encode one prompt with the encoder, look the same prompt up in a filled in-memory TextEmbeddingCache)."""
+    from motiondiff.text.cache import TextEmbeddingCache
+    from motiondiff.text.encoders import build_text_encoder
+
+    encoder = build_text_encoder(**encoder_kwargs)
+    cache = TextEmbeddingCache(encoder)
+    cache.precompute([PROMPT])
+    return (lambda: encoder.encode([PROMPT])), (lambda: cache.embed([PROMPT]))

@@ -1,0 +1,105 @@
+"""Fewer sampling steps at matched quality (issue 8): FID, R-precision, MM-Dist and Diversity of one model per
+sampler and step count, next to the seconds one motion takes, and the cheapest sampler whose FID is within
+``tolerance`` of DDIM-50's.
+
+    python evaluate.py -m checkpoint=shipped sampler=ddim steps=10,20,50 replications=10 mm_replications=0
+    python evaluate.py checkpoint=shipped sampler=ddpm replications=3 mm_replications=0
+    python -m motiondiff.eval.sampler_curve runs=<evaluate run dir>,... [bench=bench/results/latest.json]
+        [tolerance=0.1] [out=docs/results/sampler_curve]
+
+Seconds per motion come from the bench's `sample_1_<sampler><steps>_guided_s` (one process, idle machine), not
+from the evaluations, which may have run side by side.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from motiondiff.cli.common import REPO_DIR, UsageError, key_value_args
+
+KEYS = ("runs", "bench", "tolerance", "out")
+DEFAULT_OUT = REPO_DIR / "docs" / "results" / "sampler_curve"
+METRICS = ("fid", "r_precision_top3", "mm_dist", "diversity")
+
+
+def load_run(folder: Path) -> dict:
+    path = folder / "metrics.json"
+    if not path.is_file():
+        raise UsageError(f"{folder} has no metrics.json: pass the folders evaluate.py wrote")
+    data = json.loads(path.read_text())
+    name = data["sampler"]["name"]
+    steps = data.get("steps") or data["sampler"].get("steps") or (1000 if name == "ddpm" else 50)
+    return {"sampler": name, "steps": int(steps), "label": f"{name.upper()}-{int(steps)}",
+            "replications": len(data["replications"]["Model"]), "guidance": data["guidance"],
+            "checkpoint": Path(data["checkpoint"]).name,
+            **{m: data["summary"][m] for m in METRICS}}  # fmt: skip
+
+
+def choose(rows: list[dict], tolerance: float) -> dict:
+    """The row with the fewest steps whose FID is within ``tolerance`` (relative) of DDIM-50's."""
+    reference = next((r for r in rows if r["label"] == "DDIM-50"), None)
+    if reference is None:
+        raise UsageError("the runs need a DDIM-50 evaluation to compare against")
+    limit = reference["fid"][0] * (1 + tolerance)
+    return min((r for r in rows if r["fid"][0] <= limit), key=lambda r: (r["steps"], r["fid"][0]))
+
+
+def write(out: Path, rows: list[dict], chosen: dict, tolerance: float, times: dict) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.parent.mkdir(parents=True, exist_ok=True)
+    ref = next(r for r in rows if r["label"] == "DDIM-50")["fid"][0]
+    lines = ["# Sampling steps against quality", "",
+             f"Model `{rows[0].get('checkpoint', 'shipped')}`, guidance {rows[0]['guidance']:g}; mean ± 95% CI over "
+             "each run's replications; seconds: one 196-frame motion with guidance (bench/results/latest.json).", "",
+             "| sampler | replications | FID | FID / DDIM-50 | R-precision top-3 | MM-Dist | Diversity | s per motion |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+    for r in rows:
+        t = times.get(f"sample_1_{r['sampler']}{r['steps']}_guided_s")
+        lines.append(f"| {r['label']}{' **(chosen)**' if r is chosen else ''} | {r['replications']} | "
+                     f"{r['fid'][0]:.2f} ± {r['fid'][1]:.2f} | {r['fid'][0] / ref:.2f} | "
+                     f"{r['r_precision_top3'][0]:.3f} ± {r['r_precision_top3'][1]:.3f} | {r['mm_dist'][0]:.2f} | "
+                     f"{r['diversity'][0]:.2f} | {'–' if t is None else f'{t:.2f}'} |")  # fmt: skip
+    lines += ["", f"Chosen: **{chosen['label']}**, the fewest steps with FID within {tolerance:.0%} of DDIM-50's.", ""]
+    out.with_suffix(".md").write_text("\n".join(lines))
+    out.with_suffix(".json").write_text(json.dumps({"rows": rows, "chosen": chosen["label"], "tolerance": tolerance,
+                                                    "seconds": times}, indent=1))  # fmt: skip
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for name in dict.fromkeys(r["sampler"] for r in rows):
+        part = sorted((r for r in rows if r["sampler"] == name), key=lambda r: r["steps"])
+        ax.errorbar([r["steps"] for r in part], [r["fid"][0] for r in part], yerr=[r["fid"][1] for r in part],
+                    marker="o", capsize=3, label=name.upper())  # fmt: skip
+    ax.axhline(ref * (1 + tolerance), color="grey", ls="--", lw=1, label=f"DDIM-50 FID + {tolerance:.0%}")
+    ax.set_xscale("log")
+    ax.set_xlabel("sampling steps")
+    ax.set_ylabel("FID (lower is better)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out.with_suffix(".png"), dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = key_value_args(argv if argv is not None else sys.argv[1:], KEYS)
+    if "runs" not in args:
+        raise UsageError("usage: python -m motiondiff.eval.sampler_curve runs=<dir>,<dir>,... [key=value ...]")
+    rows = sorted((load_run(Path(p)) for p in args["runs"].split(",")), key=lambda r: (r["sampler"], r["steps"]))
+    tolerance = float(args.get("tolerance", 0.1))
+    bench = Path(args.get("bench", REPO_DIR / "bench" / "results" / "latest.json"))
+    times = (
+        {k: v for k, v in json.loads(bench.read_text()).items() if k.startswith("sample_1_")} if bench.is_file() else {}
+    )
+    chosen = choose(rows, tolerance)
+    out = Path(args.get("out", DEFAULT_OUT))
+    write(out, rows, chosen, tolerance, times)
+    print(out.with_suffix(".md").read_text())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

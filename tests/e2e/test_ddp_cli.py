@@ -1,0 +1,53 @@
+"""Multi-process training with Lightning DDP (`trainer=ddp`): two CPU processes over gloo, each with half of the
+global batch, against one process with the whole batch. Both start from the same weights (same seed); their per-step
+noise draws differ, so the curves are compared on averages, not step by step. The generation evaluation and the
+best-FID checkpoint run too (8 clips, DDIM-5, to keep the test short)."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+from cli_helpers import TINY, run_cli
+
+STEPS = 32  # two epochs of the embedded data at a global batch of 16 (251 clips / 16 = 16 steps each)
+COMMON = [*TINY, f"trainer.max_steps={STEPS}", f"checkpoint_every={STEPS}", "optim.lr=1e-3",
+          "trainer.check_val_every_n_epoch=1", "callbacks.evaluation.num_clips=8", "callbacks.evaluation.steps=5"]  # fmt: skip
+
+
+def metrics(workdir: Path) -> dict[str, dict[int, float]]:
+    (run,) = (workdir / "outputs" / "train").glob("*/csv/version_0/metrics.csv")
+    out: dict[str, dict[int, float]] = {}
+    with open(run) as f:
+        for row in csv.DictReader(f):
+            for key in ("train/loss", "val/loss", "val/fid"):
+                if row.get(key):
+                    out.setdefault(key, {})[int(row["step"])] = float(row[key])
+    return out
+
+
+def test_two_process_ddp_follows_the_single_process_curve_at_the_same_global_batch(tmp_path):
+    single, ddp = tmp_path / "single", tmp_path / "ddp"
+    single.mkdir(), ddp.mkdir()
+    run_cli("train.py", *COMMON, "batch_size=16", env_dir=single, timeout=600)
+    run_cli("train.py", *COMMON, "trainer=ddp", "batch_size=8", env_dir=ddp, timeout=600)
+    (run_dir,) = (ddp / "outputs" / "train").glob("*")
+    assert (run_dir / "train_ddp_process_1.log").is_file(), "the second process did not run"
+    one, two = metrics(single), metrics(ddp)
+    for curve in (one, two):
+        losses = np.array([curve["train/loss"][s] for s in sorted(curve["train/loss"])])
+        assert len(losses) == STEPS
+        assert losses[-8:].mean() < 0.8 * losses[:8].mean(), "the loss did not fall"
+    last_one = np.mean([one["train/loss"][s] for s in sorted(one["train/loss"])[-16:]])
+    last_two = np.mean([two["train/loss"][s] for s in sorted(two["train/loss"])[-16:]])
+    assert abs(last_two - last_one) < 0.15 * last_one, (last_one, last_two)
+    # val/loss is reduced over both processes' halves of the validation set (sync_dist) and logged once per epoch
+    assert sorted(two["val/loss"]) == sorted(one["val/loss"]) and len(two["val/loss"]) == 2
+    for step, value in one["val/loss"].items():
+        assert abs(two["val/loss"][step] - value) < 0.15 * value, (step, value, two["val/loss"][step])
+    # the generation metrics run on every process (same weights, same seed) and the best-FID checkpoint is kept once
+    assert sorted(two["val/fid"]) == sorted(one["val/fid"])
+    assert len(list((run_dir / "checkpoints").glob("best-fid-*.ckpt"))) == 1
+    ckpt = run_dir / "checkpoints" / "last.ckpt"
+    assert ckpt.is_file() and len(list((ddp / "outputs" / "train").glob("*/run.json"))) == 1
