@@ -66,3 +66,18 @@ def test_quick_bench_writes_the_table_and_the_required_keys(tmp_path):
     assert result["machine"]["cores"] >= 1 and result["quick"]
     table = (tmp_path / "result.md").read_text()
     assert "| train step, tiny preset, batch 64, 20 frames |" in table and "(default sampler)" in table
+
+
+def test_forward_flops_match_the_transformer_formula():
+    """Per layer 8·T·d² (QKV + output projections) + 4·B·L²·d (scores and mixing) + 4·T·d·ff (feed-forward), with
+    L = frames + 1 tokens (the time/condition token), T = B·L; plus the input and output projections."""
+    from motiondiff.bench.workloads import FEATURE_DIM, forward_flops
+    from motiondiff.models.denoiser import PRESETS
+
+    b, n = 1, 196
+    p = PRESETS["paper"]
+    d, ff, length = p["d_model"], p["ff_size"], n + 1
+    tokens = b * length
+    layers = p["num_layers"] * (8 * tokens * d**2 + 4 * b * length**2 * d + 4 * tokens * d * ff)
+    projections = 2 * (2 * b * n * FEATURE_DIM * d)
+    assert abs(forward_flops("paper", b, n) / (layers + projections) - 1) < 0.01

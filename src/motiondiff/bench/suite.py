@@ -100,7 +100,7 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "") ->
     for batch in (1, 32):
         for bf16 in bf16_options:
             run = workloads.forward(paper, batch, frames, bf16=bf16)
-            flops = count_flops(run)
+            flops = workloads.forward_flops(paper, batch, frames)
             suffix = "_bf16" if bf16 else ""
             row = s.time(f"denoiser forward, {'tiny' if quick else 'paper'} preset, batch {batch}{' bf16' if bf16 else ''}", run,
                          key=f"forward_paper_bs{batch}{suffix}_s")  # fmt: skip

@@ -73,6 +73,17 @@ def forward(preset: str | dict, batch: int, frames: int, bf16: bool = False) -> 
     return run
 
 
+def forward_flops(preset: str | dict, batch: int, frames: int) -> int:
+    """FLOPs of that forward. Counted on the unfused path (train mode, no grad): PyTorch's FLOP counter does not see
+    inside the fused inference kernels, which compute the same products."""
+    from motiondiff.bench.flops import count_flops
+
+    model = build_denoiser(preset).train()
+    data = random_batch(batch, frames)
+    with torch.no_grad():
+        return count_flops(lambda: model(data["x0"], torch.full((batch,), 500), cond=data["cond"], mask=data["mask"]))
+
+
 class _Stop(Exception):
     pass
 
