@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 from cli_helpers import TINY, run_cli
 
-STEPS = 32  # two epochs of the embedded data at a global batch of 16 (251 clips / 16 = 16 steps each)
-COMMON = [*TINY, f"trainer.max_steps={STEPS}", f"checkpoint_every={STEPS}", "optim.lr=1e-3",
+STEPS = 64  # four epochs of the embedded data at a global batch of 16 (251 clips / 16 = 16 steps each)
+COMMON = [*TINY, f"trainer.max_steps={STEPS}", f"checkpoint_every={STEPS}", "optim.lr=2e-3",
           "trainer.check_val_every_n_epoch=1", "callbacks.evaluation.num_clips=8", "callbacks.evaluation.steps=5"]  # fmt: skip
 
 
@@ -35,17 +35,16 @@ def test_two_process_ddp_follows_the_single_process_curve_at_the_same_global_bat
     (run_dir,) = (ddp / "outputs" / "train").glob("*")
     assert (run_dir / "train_ddp_process_1.log").is_file(), "the second process did not run"
     one, two = metrics(single), metrics(ddp)
-    for curve in (one, two):
-        losses = np.array([curve["train/loss"][s] for s in sorted(curve["train/loss"])])
-        assert len(losses) == STEPS
-        assert losses[-8:].mean() < 0.8 * losses[:8].mean(), "the loss did not fall"
-    last_one = np.mean([one["train/loss"][s] for s in sorted(one["train/loss"])[-16:]])
-    last_two = np.mean([two["train/loss"][s] for s in sorted(two["train/loss"])[-16:]])
-    assert abs(last_two - last_one) < 0.15 * last_one, (last_one, last_two)
-    # val/loss is reduced over both processes' halves of the validation set (sync_dist) and logged once per epoch
-    assert sorted(two["val/loss"]) == sorted(one["val/loss"]) and len(two["val/loss"]) == 2
-    for step, value in one["val/loss"].items():
-        assert abs(two["val/loss"][step] - value) < 0.15 * value, (step, value, two["val/loss"][step])
+    assert len(one["train/loss"]) == len(two["train/loss"]) == STEPS
+    # per-step training losses are noisy (random t per sample): compare their means over the run
+    mean_one, mean_two = np.mean(list(one["train/loss"].values())), np.mean(list(two["train/loss"].values()))
+    assert abs(mean_two - mean_one) < 0.1 * mean_one, (mean_one, mean_two)
+    # val/loss (fixed noise per batch) is reduced over both processes' halves of the validation set (sync_dist)
+    assert sorted(two["val/loss"]) == sorted(one["val/loss"]) and len(two["val/loss"]) == STEPS // 16
+    curve_one = [one["val/loss"][s] for s in sorted(one["val/loss"])]
+    curve_two = [two["val/loss"][s] for s in sorted(two["val/loss"])]
+    assert curve_one[-1] < curve_one[0] and curve_two[-1] < curve_two[0], (curve_one, curve_two)
+    assert np.allclose(curve_two, curve_one, rtol=0.05), (curve_one, curve_two)
     # the generation metrics run on every process (same weights, same seed) and the best-FID checkpoint is kept once
     assert sorted(two["val/fid"]) == sorted(one["val/fid"])
     assert len(list((run_dir / "checkpoints").glob("best-fid-*.ckpt"))) == 1
