@@ -59,11 +59,13 @@ def test_quick_bench_writes_the_table_and_the_required_keys(tmp_path):
     spec = importlib.util.spec_from_file_location("bench_run", REPO / "bench" / "run.py")
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
-    assert bench.main(["--quick", "--out", str(tmp_path / "result")]) == 0
+    assert bench.main(["--quick", "--compile", "--out", str(tmp_path / "result")]) == 0
     result = json.loads((tmp_path / "result.json").read_text())
     for key in ("train_step_paper_bs64_s", "sample_one_motion_default_s", "forward_paper_bs32_mfu", "text_cache_s"):
         assert result[key] > 0, key
     assert result["machine"]["cores"] >= 1 and result["quick"]
+    (compiled,) = [r for r in result["rows"] if r["name"].endswith("torch.compile")]
+    assert compiled["max_abs_diff"] <= 1e-5  # the compiled forward computes what eager does
     table = (tmp_path / "result.md").read_text()
     assert "| train step, tiny preset, batch 64, 20 frames |" in table and "(default sampler)" in table
 

@@ -63,7 +63,23 @@ class Suite:
         return row
 
 
-def run_suite(quick: bool = False, model: str = "shipped", command: str = "") -> dict:
+def compile_rows(s: Suite, quick: bool) -> None:
+    """torch.compile against eager for one guided sampling step of the CPU preset (batch 2): compile time, step time
+    and the largest difference of the outputs."""
+    preset, frames = (TINY, 20) if quick else ("cpu", 196)
+    eager = workloads.forward(preset, 2, frames)
+    compiled = workloads.forward(preset, 2, frames, compile=True)
+    start = time.perf_counter()
+    out = compiled()
+    seconds = time.perf_counter() - start
+    diff = float((out - eager()).abs().max())
+    s.time("denoiser forward, cpu preset, batch 2, eager", eager, key="forward_cpu_bs2_eager_s")
+    row = s.time("denoiser forward, cpu preset, batch 2, torch.compile", compiled, key="forward_cpu_bs2_compiled_s",
+                 note=f"compiled in {seconds:.0f} s; largest difference from eager {diff:.1e}")  # fmt: skip
+    row.update(compile_s=seconds, max_abs_diff=diff)
+
+
+def run_suite(quick: bool = False, model: str = "shipped", command: str = "", compile: bool = False) -> dict:
     from motiondiff.cli.common import REPO_DIR, find_checkpoint, text_encoder_kwargs
     from motiondiff.cli.sample import load_module
 
@@ -111,6 +127,9 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "") ->
             row["detail"] += (f"; {row['flops_per_s'] / 1e9:.1f} GFLOP/s = {row['mfu_vs_matmul']:.0%} of a "
                               f"{shape[0]}x{shape[1]}x{shape[2]} matmul ({ref['flops_per_s'] / 1e9:.1f} GFLOP/s)")  # fmt: skip
             s.keys[f"forward_paper_bs{batch}{suffix}_mfu"] = row["mfu_vs_matmul"]
+
+    if compile:
+        compile_rows(s, quick)
 
     # Sampling from text with the real model.
     module = load_module(find_checkpoint(model, REPO_DIR / "outputs"))

@@ -59,9 +59,14 @@ def train_step(preset: str | dict, batch: int, frames: int, bf16: bool = False) 
     return step
 
 
-def forward(preset: str | dict, batch: int, frames: int, bf16: bool = False) -> Callable[[], torch.Tensor]:
-    """The denoiser's inference forward (eval mode: PyTorch's fused encoder path), as each sampling step runs it."""
+def forward(
+    preset: str | dict, batch: int, frames: int, bf16: bool = False, compile: bool = False
+) -> Callable[[], torch.Tensor]:
+    """The denoiser's inference forward (eval mode: PyTorch's fused encoder path), as each sampling step runs it;
+    ``compile``: through torch.compile (inductor; the first call compiles)."""
     model = build_denoiser(preset).eval()
+    if compile:
+        model = torch.compile(model)
     data = random_batch(batch, frames)
     t = torch.full((batch,), 500)
 
