@@ -161,3 +161,21 @@ def test_bad_export_format_is_named_before_sampling(tmp_path):
     assert proc.returncode == 2
     assert "unknown export format(s) fbx; choose from mp4, gif, bvh, html" in proc.stderr
     assert not (tmp_path / "outputs" / "sample").exists() or not any((tmp_path / "outputs" / "sample").rglob("*.npy"))
+
+
+def test_resuming_from_a_crafted_checkpoint_runs_no_code(tmp_path):
+    """train.py ckpt_path= goes through Lightning's loader with weights_only=True: a pickle that would create a
+    marker file while loading is refused before training starts."""
+    import torch
+
+    marker = tmp_path / "code_ran"
+
+    class Payload:
+        def __reduce__(self):
+            return (open, (str(marker), "w"))
+
+    crafted = tmp_path / "last.ckpt"
+    torch.save({"state_dict": {}, "payload": Payload()}, crafted)
+    proc = run_cli("train.py", *TINY, "trainer.max_steps=2", f"ckpt_path={crafted}", env_dir=tmp_path, check=False)
+    assert proc.returncode != 0 and "Weights only load failed" in proc.stdout + proc.stderr
+    assert not marker.exists()

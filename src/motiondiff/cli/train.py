@@ -139,7 +139,7 @@ def run(cfg: DictConfig) -> Path:
     if ckpt is not None and not Path(ckpt).is_file():
         raise UsageError(f"ckpt_path={ckpt} not found; pass the last.ckpt of the run to resume")
     start = time.perf_counter()
-    trainer.fit(module, datamodule=dm, ckpt_path=ckpt)
+    trainer.fit(module, datamodule=dm, ckpt_path=ckpt, weights_only=True)  # a resumed checkpoint runs no pickled code
     seconds = time.perf_counter() - start  # wall time of fit (evaluation callbacks included): equal-time comparisons
     last = out / "checkpoints" / "last.ckpt"
     if not trainer.is_global_zero:  # DDP: the other processes only train; rank 0 writes and evaluates

@@ -99,7 +99,7 @@ def run(cfg: DictConfig) -> Path:
     n_params = sum(p.numel() for p in module.denoiser.parameters())
     log.info("GuidedMotion latent denoisers + graph attention: %.2f M parameters; outputs in %s", n_params / 1e6, out)
     start = time.perf_counter()
-    trainer.fit(module, datamodule=dm, ckpt_path=cfg.ckpt_path)
+    trainer.fit(module, datamodule=dm, ckpt_path=cfg.ckpt_path, weights_only=True)  # no pickled code runs
     seconds = time.perf_counter() - start
     meta = {"train_steps": trainer.global_step, "train_seconds": round(seconds, 1), "parameters": n_params,
             "vaes": {k: str(v) for k, v in cfg.vae.items()}, "overrides": list(HydraConfig.get().overrides.task)}  # fmt: skip

@@ -75,7 +75,7 @@ def run(cfg: DictConfig) -> Path:
     n_params = sum(p.numel() for p in module.vae.parameters() if p.requires_grad)
     log.info("motion VAE, level %s (Q=%d): %.2f M parameters; outputs in %s", cfg.level, tokens, n_params / 1e6, out)
     start = time.perf_counter()
-    trainer.fit(module, datamodule=dm, ckpt_path=ckpt)
+    trainer.fit(module, datamodule=dm, ckpt_path=ckpt, weights_only=True)  # a resumed checkpoint runs no pickled code
     seconds = time.perf_counter() - start
     best = next((c for c in callbacks if getattr(c, "monitor", None) == "val/mpjpe"), None)
     meta = {
