@@ -22,6 +22,9 @@ def test_train_writes_checkpoint_and_logs(text_ckpt):
     ckpt = torch.load(text_ckpt, map_location="cpu", weights_only=True)  # loads without running pickled code
     hp = ckpt["hyper_parameters"]
     assert ckpt["global_step"] == 4 and hp["condition"]["kind"] == "text" and hp["text_encoder"]["name"] == "minilm"
+    record = json.loads((run / "run.json").read_text())  # what produced the run: config, code and packages
+    assert record["train_steps"] == 4 and record["provenance"]["config"]["trainer"]["max_steps"] == 4
+    assert record["provenance"]["packages"]["lightning"] == "2.6.6" and "commit" in record["provenance"]["git"]
     assert len(hp["mean"]) == len(hp["std"]) == 263
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from pathlib import Path
@@ -12,10 +11,10 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.atomic import atomic_write
 from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.diffusion import MotionDiffusionModule
+from motiondiff.provenance import provenance, update_run_json
 
 log = logging.getLogger(__name__)
 
@@ -138,6 +137,8 @@ def run(cfg: DictConfig) -> Path:
     ckpt = cfg.ckpt_path
     if ckpt is not None and not Path(ckpt).is_file():
         raise UsageError(f"ckpt_path={ckpt} not found; pass the last.ckpt of the run to resume")
+    if trainer.is_global_zero:  # before the first step: even a killed run says what it was
+        update_run_json(out, provenance=provenance(cfg))
     start = time.perf_counter()
     trainer.fit(module, datamodule=dm, ckpt_path=ckpt, weights_only=True)  # a resumed checkpoint runs no pickled code
     seconds = time.perf_counter() - start  # wall time of fit (evaluation callbacks included): equal-time comparisons
@@ -146,7 +147,7 @@ def run(cfg: DictConfig) -> Path:
         return last
     meta = {"train_steps": trainer.global_step, "train_seconds": round(seconds, 1),
             "overrides": list(HydraConfig.get().overrides.task)}  # fmt: skip
-    atomic_write(out / "run.json", lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)))
+    update_run_json(out, **meta)
     print(f"\ntrained {trainer.global_step} steps; checkpoint: {last}")
     if cfg.final_evaluation is not None:
         final_evaluation(cfg, module, dm, out, trainer.global_step)
@@ -168,9 +169,6 @@ def final_evaluation(cfg: DictConfig, module: MotionDiffusionModule, dm: MotionD
                                       "wandb": False, "precision": cfg.trainer.precision}, overrides)  # fmt: skip
     module.to(eval_cfg.device)
     summary = report_evaluation(eval_cfg, module, dm, out, f"{out} (end of training, step {steps})")
-    run_json = out / "run.json"
-    meta = json.loads(run_json.read_text()) if run_json.is_file() else {}
-    meta.update({"train_steps": steps, "overrides": list(HydraConfig.get().overrides.task),
-                 "study": to_dict(cfg.study) if cfg.get("study") else None})  # fmt: skip
-    atomic_write(run_json, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)))
+    update_run_json(out, train_steps=steps, overrides=list(HydraConfig.get().overrides.task),
+                    study=to_dict(cfg.study) if cfg.get("study") else None)  # fmt: skip
     return summary

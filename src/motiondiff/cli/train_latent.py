@@ -3,7 +3,6 @@ diffusion on three trained motion VAEs (frozen), with the caption graphs of ever
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from pathlib import Path
@@ -14,12 +13,12 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from motiondiff.atomic import atomic_write
 from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.hierarchical import LEVELS
+from motiondiff.provenance import provenance, update_run_json
 
 log = logging.getLogger(__name__)
 
@@ -98,12 +97,14 @@ def run(cfg: DictConfig) -> Path:
                         default_root_dir=out)  # fmt: skip
     n_params = sum(p.numel() for p in module.denoiser.parameters())
     log.info("GuidedMotion latent denoisers + graph attention: %.2f M parameters; outputs in %s", n_params / 1e6, out)
+    if trainer.is_global_zero:  # before the first step: even a killed run says what it was
+        update_run_json(out, provenance=provenance(cfg))
     start = time.perf_counter()
     trainer.fit(module, datamodule=dm, ckpt_path=cfg.ckpt_path, weights_only=True)  # no pickled code runs
     seconds = time.perf_counter() - start
     meta = {"train_steps": trainer.global_step, "train_seconds": round(seconds, 1), "parameters": n_params,
             "vaes": {k: str(v) for k, v in cfg.vae.items()}, "overrides": list(HydraConfig.get().overrides.task)}  # fmt: skip
-    atomic_write(out / "run.json", lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)))
+    update_run_json(out, **meta)
     last = out / "checkpoints" / "last.ckpt"
     print(f"\ntrained {trainer.global_step} steps in {seconds:.0f} s; checkpoint: {last}")
     return last

@@ -7,7 +7,6 @@ level comparison (`python -m motiondiff.eval.vae_levels`) reports.
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from pathlib import Path
@@ -17,12 +16,12 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from motiondiff.atomic import atomic_write
 from motiondiff.cli.common import UsageError, to_dict
 from motiondiff.cli.train import data_hparams
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.vae import LEVEL_TOKENS
+from motiondiff.provenance import provenance, update_run_json
 
 log = logging.getLogger(__name__)
 
@@ -74,6 +73,8 @@ def run(cfg: DictConfig) -> Path:
                         callbacks=callbacks, default_root_dir=out)  # fmt: skip
     n_params = sum(p.numel() for p in module.vae.parameters() if p.requires_grad)
     log.info("motion VAE, level %s (Q=%d): %.2f M parameters; outputs in %s", cfg.level, tokens, n_params / 1e6, out)
+    if trainer.is_global_zero:  # before the first step: even a killed run says what it was
+        update_run_json(out, provenance=provenance(cfg))
     start = time.perf_counter()
     trainer.fit(module, datamodule=dm, ckpt_path=ckpt, weights_only=True)  # a resumed checkpoint runs no pickled code
     seconds = time.perf_counter() - start
@@ -88,7 +89,7 @@ def run(cfg: DictConfig) -> Path:
         "best_val_mpjpe_m": float(best.best_model_score) if best and best.best_model_score is not None else None,
         "overrides": list(HydraConfig.get().overrides.task),
     }
-    atomic_write(out / "run.json", lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)))
+    update_run_json(out, **meta)
     last = out / "checkpoints" / "last.ckpt"
     print(f"\ntrained {trainer.global_step} steps in {seconds:.0f} s; checkpoint: {last}")
     if meta["best_checkpoint"]:
