@@ -24,6 +24,7 @@ from motiondiff.data.prepared import PreparedSplit
 from motiondiff.data.prepared import load_split as load_prepared_split
 from motiondiff.data.representation_spec import HMLBridge, bridge_from_spec, representation_spec
 from motiondiff.data.representations import Representation, get_representation
+from motiondiff.data.resumable import EpochShuffleSampler
 from motiondiff.skeleton import SMPL22
 
 log = logging.getLogger(__name__)
@@ -58,6 +59,8 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         self.batch_size = batch_size
         self.num_workers = num_workers
         self.max_frames = max_frames
+        # (epoch, samples already used in it) for the next train loader: set when a run resumes (lit.resume)
+        self.resume_position: tuple[int, int] | None = None
         self.unit_length = unit_length
         self.seed = seed
         self.datasets: dict[str, MotionDataset] = {}
@@ -130,16 +133,23 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
 
     def _loader(self, split: str) -> DataLoader:
         train = split == "train"
+        dataset = self.dataset(split)
+        sampler = None
+        if train:  # an order a resumed run can rebuild (motiondiff.data.resumable)
+            sampler = EpochShuffleSampler(len(dataset), self.seed)
+            if self.resume_position is not None:
+                sampler.resume(*self.resume_position)
+                self.resume_position = None
         return DataLoader(
-            self.dataset(split),
+            dataset,
             batch_size=self.batch_size,
-            shuffle=train,
+            sampler=sampler,
             drop_last=False,
             num_workers=self.num_workers,
             persistent_workers=self.num_workers > 0,
             collate_fn=collate_motion,
             worker_init_fn=_reseed_worker,
-            generator=torch.Generator().manual_seed(self.seed),  # repeatable shuffling and worker seeds
+            generator=torch.Generator().manual_seed(self.seed),  # repeatable worker seeds
         )
 
     def train_dataloader(self) -> DataLoader:

@@ -58,6 +58,7 @@ class MotionDataset(Dataset):
         self.max_frames = max_frames
         self.unit_length = unit_length
         self.train = train
+        self.seed = int(seed or 0)
         self.rng = np.random.default_rng(seed)
 
     def __len__(self) -> int:
@@ -73,16 +74,23 @@ class MotionDataset(Dataset):
             )
         return motion * self.std + self.mean
 
-    def __getitem__(self, index: int) -> dict:
+    def __getitem__(self, key: int | tuple[int, int]) -> dict:
+        """``key``: a clip index, or (epoch, index) from `EpochShuffleSampler`, in which case the random window and
+        caption come from (seed, epoch, index) alone, so a resumed run draws what the interrupted one would have."""
+        if isinstance(key, tuple):
+            epoch, index = key
+            rng = np.random.default_rng((self.seed, int(epoch), int(index)))
+        else:
+            index, rng = key, self.rng
         rec = self.records[index]
         n = min(rec.length, self.max_frames)
         n = max(self.unit_length, n - n % self.unit_length)
         start = 0
         if self.train and rec.length > n:
-            start = int(self.rng.integers(0, rec.length - n + 1))
+            start = int(rng.integers(0, rec.length - n + 1))
         motion = self.normalise(rec.motion[start : start + n])
         if rec.texts:
-            text = rec.texts[int(self.rng.integers(len(rec.texts)))] if self.train else rec.texts[0]
+            text = rec.texts[int(rng.integers(len(rec.texts)))] if self.train else rec.texts[0]
         else:
             text = ""
         return {
