@@ -43,13 +43,13 @@ def quiet_tool_caches() -> None:
 
 def user_errors(fn):
     """Report user errors as one clear line instead of a traceback."""
-    from motiondiff.data.errors import DatasetNotFoundError
+    from motiondiff.data.errors import DatasetNotFoundError, RepresentationError
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
-        except (UsageError, DatasetNotFoundError) as err:
+        except (UsageError, DatasetNotFoundError, RepresentationError) as err:
             print(f"error: {err}", file=sys.stderr)
             sys.exit(2)
 

@@ -12,6 +12,7 @@ from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, find_checkpoint
 from motiondiff.cli.sample import check_text, export_formats, load_module, slug
+from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
@@ -75,6 +76,7 @@ def _check(cfg: DictConfig, module) -> int | None:
 
 
 def run(cfg: DictConfig) -> Path:
+    check(cfg, RULES_SAMPLE)  # types and ranges before any work
     formats = export_formats(cfg)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)

@@ -21,6 +21,7 @@ from omegaconf import DictConfig
 from tqdm import tqdm
 
 from motiondiff.cli.common import UsageError, find_checkpoint, to_dict
+from motiondiff.cli.validate import RULES_EVALUATE, check
 from motiondiff.eval import report
 from motiondiff.eval.protocol import EvalClips, Evaluators, generate, multimodality, replication_metrics
 
@@ -118,6 +119,7 @@ def _log_wandb(out: Path, cfg: DictConfig, rows: dict, extra: dict) -> None:
 
 
 def run(cfg: DictConfig) -> Path:
+    check(cfg, RULES_EVALUATE)  # types and ranges before any work
     from motiondiff.cli.sample import load_module
 
     out = Path(HydraConfig.get().runtime.output_dir)

@@ -19,6 +19,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import RELEASE_SUFFIXES, UsageError, find_checkpoint, text_encoder_kwargs, to_dict
+from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.data.captions import measure
 from motiondiff.data.representation_spec import bridge_from_spec
 from motiondiff.edit.inpaint import EDIT_MODES
@@ -179,6 +180,7 @@ def slug(text: str | None) -> str:
 
 
 def run(cfg: DictConfig) -> Path:
+    check(cfg, RULES_SAMPLE)  # types and ranges before any work
     if cfg.get("method", "mdm") == "guidedmotion":
         from motiondiff.cli.sample_guided import run as run_guided
 

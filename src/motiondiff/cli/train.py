@@ -12,6 +12,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
+from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.provenance import provenance, update_run_json
@@ -114,6 +115,7 @@ def evaluation_callbacks(callbacks: list) -> list:
 
 
 def run(cfg: DictConfig) -> Path:
+    check(cfg, RULES_TRAIN)  # types and ranges before any work
     L.seed_everything(cfg.seed, workers=True)
     out = Path(HydraConfig.get().runtime.output_dir)
     dm: MotionDataModule = instantiate(cfg.dataset.datamodule)

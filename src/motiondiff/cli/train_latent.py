@@ -14,6 +14,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
 from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
+from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.lit.vae import MotionVAEModule
@@ -79,6 +80,7 @@ def build_module(cfg: DictConfig, vaes: dict[str, MotionVAEModule]) -> Hierarchi
 
 
 def run(cfg: DictConfig) -> Path:
+    check(cfg, RULES_TRAIN)  # types and ranges before any work
     vaes = load_vaes(cfg.vae)  # before any other work: a missing VAE fails at once
     L.seed_everything(cfg.seed, workers=True)
     out = Path(HydraConfig.get().runtime.output_dir)

@@ -18,6 +18,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 
 from motiondiff.cli.common import UsageError, to_dict
 from motiondiff.cli.train import data_hparams
+from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.vae import LEVEL_TOKENS
@@ -59,6 +60,7 @@ def _loggers(cfg: DictConfig) -> list:
 
 
 def run(cfg: DictConfig) -> Path:
+    check(cfg, RULES_TRAIN)  # types and ranges before any work
     tokens = resolve_tokens(cfg.level, cfg.vae.tokens)  # before any work: a bad level fails at once
     ckpt = cfg.ckpt_path
     if ckpt is not None and not Path(ckpt).is_file():

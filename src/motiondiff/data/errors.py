@@ -18,3 +18,8 @@ class DatasetNotFoundError(FileNotFoundError):
         lines = [f"{dataset}: {self.path} not found{': ' + detail if detail else ''}."]
         lines += ["Expected layout:", layout.rstrip(), f"How to get it: {how_to_get}"]
         super().__init__("\n".join(lines))
+
+
+class RepresentationError(ValueError):
+    """A motion representation the dataset cannot give (wrong skeleton, no rotations) or one that does not exist;
+    the message names the ones that work."""

@@ -177,9 +177,18 @@ def load_mean_std(root: Path, layout: OfficialLayout) -> tuple[np.ndarray, np.nd
 
 
 def load_features(path: Path, layout: OfficialLayout) -> np.ndarray:
-    motion = np.load(path)
+    try:
+        motion = np.load(path)  # allow_pickle stays False: an object array is refused, not unpickled
+    except (ValueError, OSError, EOFError) as err:
+        raise ValueError(f"{path}: not a readable .npy array ({err}); re-extract {layout.name} or drop the id "
+                         "from the split file") from None  # fmt: skip
     if motion.ndim != 2 or motion.shape[1] != layout.feature_dim:
         raise _width_error(path, motion.shape, layout, "features")
+    bad = ~np.isfinite(motion)
+    if bad.any():
+        frame = int(np.argwhere(bad)[0][0])
+        raise ValueError(f"{path}: {int(bad.sum())} NaN/Inf values (first in frame {frame}); the features are "
+                         f"corrupt: re-extract {layout.name} or drop the id from the split file")  # fmt: skip
     return motion
 
 
@@ -238,7 +247,7 @@ def load_official_split(
     mean, std = load_mean_std(root, layout)
     ids = read_split_ids(split_file)
     records: list[MotionRecord] = []
-    no_motion, no_text, dropped = [], [], 0
+    no_motion, no_text, no_caption, dropped = [], [], [], 0
     for clip_id in ids:
         npy = root / "new_joint_vecs" / f"{clip_id}.npy"
         if not npy.is_file():
@@ -256,12 +265,17 @@ def load_official_split(
         joints = root / "new_joints" / f"{clip_id}.npy"
         if joints.is_file():
             meta["joints_path"] = str(joints)
-        records += segment_records(clip_id, motion, read_captions(text), layout, meta)
+        captions = read_captions(text)
+        if not captions:
+            no_caption.append(clip_id)
+            continue
+        records += segment_records(clip_id, motion, captions, layout, meta)
     if ids and len(no_motion) == len(ids):
         detail = f"none of the {len(ids)} ids of {split_file} has a .npy"
         raise _not_found(root / "new_joint_vecs", layout, detail)
     _warn_skipped(layout, split, no_motion, len(ids), "new_joint_vecs/<id>.npy")
     _warn_skipped(layout, split, no_text, len(ids), "texts/<id>.txt")
+    _warn_skipped(layout, split, no_caption, len(ids), "caption line in texts/<id>.txt (empty file)")
     log.info(
         "%s %s: %d records from %d ids (%d clips outside [%d, %d) frames dropped)",
         layout.name, split, len(records), len(ids), dropped, layout.min_motion_len, layout.max_clip_frames,

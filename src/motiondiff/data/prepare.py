@@ -87,6 +87,8 @@ def check_output(out: Path, force: bool) -> None:
     if out.is_dir() and (out / "meta.json").exists() and not force:
         raise PrepareError(f"--out {out} already holds a prepared dataset; pass --force to replace it")
     probe = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
+    if not probe.is_dir():
+        raise PrepareError(f"cannot create --out {out}: {probe} is a file; choose a folder path")
     if not os.access(probe, os.W_OK):
         raise PrepareError(f"cannot write to {probe}; choose an --out folder you can write to")
 
@@ -341,4 +343,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Run the imported module's main, not this __main__ copy: prepare_bvh raises motiondiff.data.prepare's
+    # PrepareError, which is another class than __main__.PrepareError and would escape the except above.
+    from motiondiff.data.prepare import main as module_main
+
+    sys.exit(module_main())

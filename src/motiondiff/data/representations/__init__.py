@@ -3,6 +3,7 @@ rpajr, rpejr, rpmjr). `get_representation` builds one from its name and the data
 
 from __future__ import annotations
 
+from motiondiff.data.errors import RepresentationError
 from motiondiff.data.representations.base import Representation
 from motiondiff.data.representations.hml import HMLRepresentation
 from motiondiff.data.representations.rig import EULER_ORDER, JointPositions, RotationRepresentation
@@ -32,12 +33,12 @@ def get_representation(name: str, feature_skeleton: Skeleton, rig: Skeleton | No
     """The representation `name` for a dataset whose clips have `feature_skeleton` joints (SMPL-22 / KIT-21) and,
     when the source has rotations, a rotation `rig`."""
     if name not in REPRESENTATIONS:
-        raise ValueError(f"unknown representation {name!r}; choose from {', '.join(REPRESENTATIONS)}")
+        raise RepresentationError(f"unknown representation {name!r}; choose from {', '.join(REPRESENTATIONS)}")
     if name in _HML:
         if feature_skeleton.num_joints != _HML[name]:
             right = _hml_name(feature_skeleton)
             hint = f"use {right!r}" if right else "hml263 needs SMPL-22 joints, kit251 KIT-21 joints"
-            raise ValueError(
+            raise RepresentationError(
                 f"{name} is defined for a {_HML[name]}-joint feature skeleton, but this dataset's is "
                 f"{feature_skeleton.name!r} ({feature_skeleton.num_joints} joints): {hint}"
             )
@@ -46,7 +47,7 @@ def get_representation(name: str, feature_skeleton: Skeleton, rig: Skeleton | No
         return JointPositions(rig if rig is not None else feature_skeleton, uses_rig=rig is not None)
     if rig is None:
         hml = _hml_name(feature_skeleton) or "hml263/kit251"
-        raise ValueError(
+        raise RepresentationError(
             f"{name} needs joint rotations, but this dataset stores joint positions only (no rotation rig); "
             f"representations that work on it: {hml}, jp"
         )

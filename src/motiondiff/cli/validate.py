@@ -1,0 +1,97 @@
+"""Config values checked before any work starts: wrong types and out-of-range numbers fail with the key path and
+the allowed range, not deep inside PyTorch after files were written.
+
+Hydra's structured configs (dataclasses in a ConfigStore) would type every key, but these configs are mostly open
+groups (any backbone or dataset brings its own keys); a rule table over the keys every run shares checks types and
+ranges in one place, and the entry points call `check(cfg, RULES_...)` first.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from omegaconf import DictConfig, OmegaConf
+
+from motiondiff.cli.common import UsageError
+from motiondiff.data.representations import REPRESENTATIONS
+
+
+@dataclass(frozen=True)
+class Rule:
+    kind: type  # int or float (an int passes as a float); str for a choice
+    low: float | None = None  # inclusive
+    above: float | None = None  # exclusive lower bound
+    high: float | None = None  # inclusive
+    below: float | None = None  # exclusive upper bound
+    choices: tuple | None = None
+    optional: bool = False  # null allowed
+
+    def describe(self) -> str:
+        if self.choices:
+            return "one of " + ", ".join(map(str, self.choices))
+        parts = ["an integer" if self.kind is int else "a number"]
+        if self.low is not None:
+            parts.append(f">= {self.low:g}")
+        if self.above is not None:
+            parts.append(f"> {self.above:g}")
+        if self.high is not None:
+            parts.append(f"<= {self.high:g}")
+        if self.below is not None:
+            parts.append(f"< {self.below:g}")
+        return " ".join(parts) + (" (or null)" if self.optional else "")
+
+    def accepts(self, value) -> bool:
+        if value is None:
+            return self.optional
+        if self.choices:
+            return value in self.choices
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return False
+        if self.kind is int and not isinstance(value, int):
+            return False
+        if not math.isfinite(value):
+            return False
+        return ((self.low is None or value >= self.low) and (self.above is None or value > self.above)
+                and (self.high is None or value <= self.high)
+                and (self.below is None or value < self.below))  # fmt: skip
+
+
+POSITIVE_INT = Rule(int, low=1)
+COMMON = {"seed": Rule(int), "paths.output_dir": Rule(str)}
+MODEL = {"model.d_model": POSITIVE_INT, "model.num_layers": POSITIVE_INT, "model.num_heads": POSITIVE_INT,
+         "model.ff_size": POSITIVE_INT, "model.dropout": Rule(float, low=0, below=1)}  # fmt: skip
+RULES_TRAIN = {
+    **COMMON, **MODEL,
+    "batch_size": POSITIVE_INT, "num_workers": Rule(int, low=0), "checkpoint_every": POSITIVE_INT,
+    "optim.lr": Rule(float, above=0), "optim.weight_decay": Rule(float, low=0), "optim.warmup_steps": Rule(int, low=0),
+    "trainer.max_steps": Rule(int, low=-1), "trainer.gradient_clip_val": Rule(float, low=0, optional=True),
+    "diffusion.steps": POSITIVE_INT, "condition.drop_prob": Rule(float, low=0, high=1),
+    "dataset.datamodule.max_frames": Rule(int, low=1, optional=True), "ema_decay": Rule(float, low=0, below=1),
+    "representation": Rule(str, choices=REPRESENTATIONS, optional=True),
+}  # fmt: skip
+# length, frames, guidance and steps are checked by sample/edit against the loaded model (its maximum length and
+# diffusion steps), with messages that say so.
+RULES_SAMPLE = {**COMMON, "num_samples": POSITIVE_INT}
+RULES_EVALUATE = {
+    **COMMON, "replications": POSITIVE_INT, "mm_replications": Rule(int, low=0), "guidance": Rule(float, low=0, optional=True),
+    "steps": Rule(int, low=1, optional=True), "batch_size": POSITIVE_INT,
+}  # fmt: skip
+
+
+def check(cfg: DictConfig, rules: dict[str, Rule]) -> None:
+    """Raise UsageError naming the first key whose value breaks its rule (keys a config lacks are skipped)."""
+    for key, rule in rules.items():
+        if OmegaConf.select(cfg, key, default="__missing__", throw_on_missing=False) == "__missing__":
+            continue
+        value = OmegaConf.select(cfg, key)
+        if rule.kind is str and not rule.choices:
+            if not isinstance(value, str) or not value.strip():
+                raise UsageError(f"{key}={value!r}: must be a non-empty string")
+            continue
+        if not rule.accepts(value):
+            raise UsageError(f"{key}={value!r}: must be {rule.describe()}; fix it with {key}=<value>")
+    d_model, heads = OmegaConf.select(cfg, "model.d_model"), OmegaConf.select(cfg, "model.num_heads")
+    if isinstance(d_model, int) and isinstance(heads, int) and d_model % heads:
+        raise UsageError(f"model.num_heads={heads} must divide model.d_model={d_model} (each head gets d_model/heads "
+                         "dims); e.g. model.num_heads=4")  # fmt: skip
