@@ -14,6 +14,7 @@ from omegaconf import DictConfig, OmegaConf
 from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
+from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.provenance import provenance, update_run_json
 
@@ -132,7 +133,11 @@ def run(cfg: DictConfig) -> Path:
 
         callbacks.append(EMAWeightAveraging(decay=cfg.ema_decay))
     trainer = L.Trainer(
-        **OmegaConf.to_container(cfg.trainer, resolve=True), logger=loggers, callbacks=callbacks, default_root_dir=out
+        **OmegaConf.to_container(cfg.trainer, resolve=True),
+        logger=loggers,
+        callbacks=callbacks,
+        default_root_dir=out,
+        plugins=[AtomicCheckpointIO()],
     )
     n_params = sum(p.numel() for p in module.denoiser.parameters() if p.requires_grad)
     log.info("denoiser: %.2f M trainable parameters; outputs in %s", n_params / 1e6, out)

@@ -16,6 +16,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
+from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.hierarchical import LEVELS
@@ -96,7 +97,7 @@ def run(cfg: DictConfig) -> Path:
     loggers = [instantiate(c) for c in (cfg.logger or {}).values()]
     callbacks = [instantiate(c) for c in (cfg.callbacks or {}).values() if c is not None]
     trainer = L.Trainer(**OmegaConf.to_container(cfg.trainer, resolve=True), logger=loggers, callbacks=callbacks,
-                        default_root_dir=out)  # fmt: skip
+                        default_root_dir=out, plugins=[AtomicCheckpointIO()])  # fmt: skip
     n_params = sum(p.numel() for p in module.denoiser.parameters())
     log.info("GuidedMotion latent denoisers + graph attention: %.2f M parameters; outputs in %s", n_params / 1e6, out)
     if trainer.is_global_zero:  # before the first step: even a killed run says what it was

@@ -20,6 +20,7 @@ from motiondiff.cli.common import UsageError, to_dict
 from motiondiff.cli.train import data_hparams
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
+from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.vae import LEVEL_TOKENS
 from motiondiff.provenance import provenance, update_run_json
@@ -72,7 +73,7 @@ def run(cfg: DictConfig) -> Path:
     module = build_module(cfg, dm, tokens)
     callbacks = [instantiate(c) for c in (cfg.callbacks or {}).values() if c is not None]
     trainer = L.Trainer(**OmegaConf.to_container(cfg.trainer, resolve=True), logger=_loggers(cfg),
-                        callbacks=callbacks, default_root_dir=out)  # fmt: skip
+                        callbacks=callbacks, default_root_dir=out, plugins=[AtomicCheckpointIO()])  # fmt: skip
     n_params = sum(p.numel() for p in module.vae.parameters() if p.requires_grad)
     log.info("motion VAE, level %s (Q=%d): %.2f M parameters; outputs in %s", cfg.level, tokens, n_params / 1e6, out)
     if trainer.is_global_zero:  # before the first step: even a killed run says what it was

@@ -1,0 +1,25 @@
+"""Checkpoints written to a temporary file beside the target and renamed into place.
+
+Lightning's own save goes through an fsspec transaction whose temporary file lives in the system temp folder; when
+that is another filesystem than the run's, the final move is a copy into the target, and a kill during the copy
+leaves a truncated checkpoint under the real name. A temporary file in the same folder makes the rename atomic.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import torch
+from lightning.pytorch.plugins.io import TorchCheckpointIO
+
+from motiondiff.atomic import atomic_write
+
+
+class AtomicCheckpointIO(TorchCheckpointIO):
+    def save_checkpoint(self, checkpoint: dict[str, Any], path, storage_options: Any | None = None) -> None:
+        if storage_options is not None:
+            raise TypeError("AtomicCheckpointIO takes no storage_options")
+        os.makedirs(os.path.dirname(os.fspath(path)) or ".", exist_ok=True)
+        atomic_write(Path(path), lambda tmp: torch.save(checkpoint, tmp), suffix=".ckpt")
