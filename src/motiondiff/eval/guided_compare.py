@@ -17,7 +17,6 @@ descriptions come from each caption's semantic graph. Writes <out>.md and <out>.
 from __future__ import annotations
 
 import json
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -25,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.bench.timing import median_seconds as timed_median
 from motiondiff.cli.common import REPO_DIR, UsageError, key_value_args, text_encoder_kwargs
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
 
@@ -102,13 +102,8 @@ def replication(latent, mdm, local_mdm, evaluators, clips, table, r: int, args: 
 
 
 def median_seconds(fn, repeats: int) -> float:
-    fn()  # warm-up (allocations, lazy init)
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+    """Median of ``repeats`` timed calls after one untimed warm-up (the bench's helper)."""
+    return timed_median(fn, repeats=repeats, warmup=1)["median_s"]
 
 
 def sampling_times(latent, mdm, local_mdm, table, caption: str, frames: int, args: dict) -> dict[str, float]:
