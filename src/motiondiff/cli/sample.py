@@ -160,6 +160,10 @@ def condition_batch(module: MotionDiffusionModule, conditions: list):
     if module.condition_kind == "text":
         from motiondiff.text.encoders import build_text_encoder
 
+        index = getattr(module, "text_index", {})
+        if index and all(c in index for c in conditions):  # training captions (e.g. the evaluation callback's):
+            rows = torch.tensor([index[c] for c in conditions], device=module.text_table.device)
+            return module.text_table[rows]  # already prepared; no encoder needed
         if not hasattr(module, "_encoder"):
             module._encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
             module._prompt_features = {}

