@@ -56,6 +56,24 @@ def user_errors(fn):
     return wrapper
 
 
+def trainer_parts(cfg: DictConfig) -> tuple[list, list]:
+    """(loggers, callbacks) instantiated from ``cfg.logger`` and ``cfg.callbacks`` (null entries left out).
+
+    ``logger=none`` is a supported choice, but Lightning's LearningRateMonitor refuses a Trainer without a logger:
+    it is dropped then (there is nowhere to log the rate to), with a note."""
+    from hydra.utils import instantiate
+    from lightning.pytorch.callbacks import LearningRateMonitor
+
+    loggers = [instantiate(c) for c in (cfg.get("logger") or {}).values() if c is not None]
+    callbacks = [instantiate(c) for c in (cfg.get("callbacks") or {}).values() if c is not None]
+    if not loggers and any(isinstance(c, LearningRateMonitor) for c in callbacks):
+        callbacks = [c for c in callbacks if not isinstance(c, LearningRateMonitor)]
+        import logging
+
+        logging.getLogger(__name__).info("logger=none: the learning-rate monitor is left out (nothing to log to)")
+    return loggers, callbacks
+
+
 def to_dict(cfg: DictConfig | dict | None) -> dict | None:
     """Plain containers (checkpoints store hyper-parameters that load with torch.load(weights_only=True))."""
     if cfg is None:

@@ -11,7 +11,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
+from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict, trainer_parts
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
@@ -126,8 +126,8 @@ def run(cfg: DictConfig) -> Path:
         init_weights(module, cfg.init_from)
     if cfg.condition.kind == "text":
         module.set_text_table(*build_text_table(cfg, dm))
-    loggers = [instantiate(c) for c in (cfg.logger or {}).values()]
-    callbacks = evaluation_callbacks([instantiate(c) for c in (cfg.callbacks or {}).values() if c is not None])
+    loggers, callbacks = trainer_parts(cfg)
+    callbacks = evaluation_callbacks(callbacks)
     if cfg.ema:
         from lightning.pytorch.callbacks import EMAWeightAveraging
 

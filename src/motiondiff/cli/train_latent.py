@@ -13,7 +13,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict
+from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict, trainer_parts
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
@@ -94,8 +94,7 @@ def run(cfg: DictConfig) -> Path:
     if cfg.logger and "wandb" in cfg.logger:
         with open_dict(cfg):
             cfg.logger.wandb.name = f"{cfg.dataset.name}-guidedmotion-{cfg.latent.name}"
-    loggers = [instantiate(c) for c in (cfg.logger or {}).values()]
-    callbacks = [instantiate(c) for c in (cfg.callbacks or {}).values() if c is not None]
+    loggers, callbacks = trainer_parts(cfg)
     trainer = L.Trainer(**OmegaConf.to_container(cfg.trainer, resolve=True), logger=loggers, callbacks=callbacks,
                         default_root_dir=out, plugins=[AtomicCheckpointIO()])  # fmt: skip
     n_params = sum(p.numel() for p in module.denoiser.parameters())

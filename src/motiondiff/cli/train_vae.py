@@ -16,7 +16,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from motiondiff.cli.common import UsageError, to_dict
+from motiondiff.cli.common import UsageError, to_dict, trainer_parts
 from motiondiff.cli.train import data_hparams
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
@@ -52,12 +52,11 @@ def build_module(cfg: DictConfig, dm: MotionDataModule, tokens: int) -> MotionVA
     )
 
 
-def _loggers(cfg: DictConfig) -> list:
+def _name_wandb_run(cfg: DictConfig) -> None:
     # The shared W&B logger names runs after the diffusion model's groups, which a VAE run does not have.
     if cfg.logger and "wandb" in cfg.logger:
         with open_dict(cfg):
             cfg.logger.wandb.name = f"{cfg.dataset.name}-vae-{cfg.level}-{cfg.vae.name}"
-    return [instantiate(c) for c in (cfg.logger or {}).values()]
 
 
 def run(cfg: DictConfig) -> Path:
@@ -71,8 +70,9 @@ def run(cfg: DictConfig) -> Path:
     dm: MotionDataModule = instantiate(cfg.dataset.datamodule)
     dm.setup("fit")
     module = build_module(cfg, dm, tokens)
-    callbacks = [instantiate(c) for c in (cfg.callbacks or {}).values() if c is not None]
-    trainer = L.Trainer(**OmegaConf.to_container(cfg.trainer, resolve=True), logger=_loggers(cfg),
+    _name_wandb_run(cfg)
+    loggers, callbacks = trainer_parts(cfg)
+    trainer = L.Trainer(**OmegaConf.to_container(cfg.trainer, resolve=True), logger=loggers,
                         callbacks=callbacks, default_root_dir=out, plugins=[AtomicCheckpointIO()])  # fmt: skip
     n_params = sum(p.numel() for p in module.vae.parameters() if p.requires_grad)
     log.info("motion VAE, level %s (Q=%d): %.2f M parameters; outputs in %s", cfg.level, tokens, n_params / 1e6, out)
