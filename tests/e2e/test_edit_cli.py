@@ -167,6 +167,9 @@ def test_editing_evaluation_runs(text_ckpt, tmp_path):
     report = json.loads((out / "report.json").read_text())
     assert set(report["modes"]) == {"overwrite", "repaint"} and "| repaint |" in (out / "report.md").read_text()
     assert all("walk" in c for c in report["parts_clips"]) and len(report["inbetween_clips"]) == 3
+    low = report["low_noise"]
+    assert low["clips"] == 3 and 0 < low["x_t_mpjpe_m"] < 0.05 and low["x0_hat_mpjpe_m"] > 0
+    assert "Denoiser at t = 20" in (out / "report.md").read_text()
     for r in report["modes"].values():
         assert r["inbetween"]["max_kept_error_m"] <= TOL and r["parts"]["max_root_relative_kept_error_m"] <= TOL
         assert 0.0 <= r["inbetween"]["share_ratio_le_3"] <= 1.0 and r["parts"]["edits"] == 2

@@ -1,0 +1,53 @@
+"""eval.editing.low_noise_error: the denoiser's error on an almost clean input, next to the input's own error."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+from hydra import compose, initialize_config_dir
+
+from motiondiff.cli.common import REPO_DIR, register_resolvers
+from motiondiff.cli.train import build_module
+from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
+from motiondiff.edit.inputs import dataset_motions
+from motiondiff.eval.editing import low_noise_error
+
+register_resolvers()
+TINY = ["model.d_model=32", "model.num_layers=1", "model.num_heads=2", "model.ff_size=64", "condition=none"]
+
+
+@pytest.fixture(scope="module")
+def module_and_clips():
+    dm = PreparedDataModule(embedded_data_root(), batch_size=8, max_frames=80)
+    dm.setup("fit")
+    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
+        cfg = compose("train", overrides=TINY)
+    torch.manual_seed(0)
+    module = build_module(cfg, dm).eval()
+    return module, dataset_motions(module, "val", embedded_data_root())[:3]
+
+
+class Identity(torch.nn.Module):
+    """An x0-predicting 'denoiser' that returns its input: x̂0 = x_t."""
+
+    def forward(self, x, t, **kwargs):
+        return x
+
+
+def test_identity_denoiser_scores_what_the_input_scores(module_and_clips):
+    module, clips = module_and_clips
+    trained = module.denoiser
+    module.denoiser = Identity()
+    try:
+        low = low_noise_error(module, clips, t=20)
+        high = low_noise_error(module, clips, t=400)
+    finally:
+        module.denoiser = trained
+    assert low["x0_hat_mpjpe_m"] == pytest.approx(low["x_t_mpjpe_m"], abs=1e-7)
+    assert 0 < low["x_t_mpjpe_m"] < high["x_t_mpjpe_m"]  # more noise, further from the clip
+
+
+def test_untrained_denoiser_is_worse_than_the_input_at_low_noise(module_and_clips):
+    module, clips = module_and_clips
+    low = low_noise_error(module, clips, t=20)
+    assert low["clips"] == 3 and low["x0_hat_mpjpe_m"] > 5 * low["x_t_mpjpe_m"]
