@@ -101,8 +101,12 @@ class HierarchicalLatentModule(L.LightningModule):
     @torch.no_grad()
     def encode(self, level: str, features: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         """Normalised motion features (B, N, D) -> the level's standardised latent (B, Q, D')."""
+        return self.standardise(level, self.vaes[level].encode(features, mask)[0])
+
+    def standardise(self, level: str, latent: torch.Tensor) -> torch.Tensor:
+        """A level's posterior mean -> the standardised latent the denoisers work on."""
         mean, std = self.latent_stats(level)
-        return (self.vaes[level].encode(features, mask)[0] - mean) / std
+        return (latent - mean) / std
 
     @torch.no_grad()
     def set_latent_stats(self, batches) -> None:
@@ -120,8 +124,7 @@ class HierarchicalLatentModule(L.LightningModule):
         for i, b in enumerate(batches):
             keys = window_keys(b)
             if keys is not None:
-                standardised = {level: (raw[level][i] - self.latent_stats(level)[0]) / self.latent_stats(level)[1]
-                                for level in LEVELS}  # fmt: skip
+                standardised = {level: self.standardise(level, raw[level][i]) for level in LEVELS}
                 for row, key in enumerate(keys):
                     self.latent_cache[key] = {level: standardised[level][row].cpu() for level in LEVELS}
 
