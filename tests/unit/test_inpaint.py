@@ -4,26 +4,15 @@ from __future__ import annotations
 
 import pytest
 import torch
-from hydra import compose, initialize_config_dir
+from fixtures.tiny_models import tiny_datamodule, tiny_module
 
-from motiondiff.cli.common import REPO_DIR, register_resolvers
-from motiondiff.cli.train import build_module
-from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
 from motiondiff.diffusion.samplers import ddim_sample, ddpm_sample
 from motiondiff.edit.inpaint import inpaint
-
-register_resolvers()
-TINY = ["model.d_model=32", "model.num_layers=1", "model.num_heads=2", "model.ff_size=64", "condition=none"]
 
 
 @pytest.fixture(scope="module")
 def module():
-    dm = PreparedDataModule(embedded_data_root(), batch_size=8, max_frames=40)
-    dm.setup("fit")
-    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
-        cfg = compose("train", overrides=TINY)
-    torch.manual_seed(0)
-    return build_module(cfg, dm).eval()
+    return tiny_module(tiny_datamodule()).eval()
 
 
 @pytest.mark.parametrize("mode", ["overwrite", "repaint"])

@@ -5,33 +5,25 @@ from __future__ import annotations
 
 import pytest
 import torch
-from hydra import compose, initialize_config_dir
+from fixtures.tiny_models import tiny_datamodule, tiny_module
 from safetensors.torch import save_file
 
-from motiondiff.cli.common import REPO_DIR, UsageError, register_resolvers
-from motiondiff.cli.train import build_module, init_weights
-from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
+from motiondiff.cli.common import UsageError
+from motiondiff.cli.train import init_weights
 from motiondiff.edit.inpaint import inpaint
 from motiondiff.lit.known_masks import random_known_keep
 from motiondiff.models.denoiser import MDMDenoiser
 
-register_resolvers()
-TINY = ["model.d_model=32", "model.num_layers=1", "model.num_heads=2", "model.ff_size=64", "condition=none"]
 KNOWN = ["+known_conditioning={prob: 0.5, frame_share: 0.5}"]
 
 
 @pytest.fixture(scope="module")
 def datamodule():
-    dm = PreparedDataModule(embedded_data_root(), batch_size=8, max_frames=40)
-    dm.setup("fit")
-    return dm
+    return tiny_datamodule()
 
 
 def _module(dm, overrides):
-    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
-        cfg = compose("train", overrides=TINY + overrides)
-    torch.manual_seed(0)
-    return build_module(cfg, dm)
+    return tiny_module(dm, ["condition=none", *overrides])
 
 
 def test_zero_initialised_projection_leaves_predictions_unchanged():

@@ -9,27 +9,18 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import torch
-from hydra import compose, initialize_config_dir
+from fixtures.tiny_models import tiny_datamodule
+from fixtures.tiny_models import tiny_module as build_tiny
 
-from motiondiff.cli.common import REPO_DIR, register_resolvers
-from motiondiff.cli.train import build_module
-from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
 from motiondiff.edit.canonical import placement, turn_points
 from motiondiff.edit.long_motion import WindowPlan, boundary_report, generate_long, plan_windows
 
-register_resolvers()
-TINY = ["model.d_model=32", "model.num_layers=1", "model.num_heads=2", "model.ff_size=64", "condition=none"]
 MAX_FRAMES = 40  # 2 s at 20 fps
 TOL = 1e-5  # metres
 
 
 def tiny_module(representation: str):
-    dm = PreparedDataModule(embedded_data_root(), batch_size=8, max_frames=MAX_FRAMES, representation=representation)
-    dm.setup("fit")
-    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
-        cfg = compose("train", overrides=TINY)
-    torch.manual_seed(0)
-    return build_module(cfg, dm).eval()
+    return build_tiny(tiny_datamodule(MAX_FRAMES, representation)).eval()
 
 
 @pytest.fixture(scope="module", params=[("hml263", 0.0), ("jp", 0.0), ("rp6jr", 0.0), ("hml263", 0.25), ("jp", 0.25)],

@@ -4,26 +4,16 @@ from __future__ import annotations
 
 import pytest
 import torch
-from hydra import compose, initialize_config_dir
+from fixtures.tiny_models import tiny_datamodule, tiny_module
 
-from motiondiff.cli.common import REPO_DIR, register_resolvers
-from motiondiff.cli.train import build_module
-from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
+from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.edit.inputs import dataset_motions
 from motiondiff.eval.editing import low_noise_error
-
-register_resolvers()
-TINY = ["model.d_model=32", "model.num_layers=1", "model.num_heads=2", "model.ff_size=64", "condition=none"]
 
 
 @pytest.fixture(scope="module")
 def module_and_clips():
-    dm = PreparedDataModule(embedded_data_root(), batch_size=8, max_frames=80)
-    dm.setup("fit")
-    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
-        cfg = compose("train", overrides=TINY)
-    torch.manual_seed(0)
-    module = build_module(cfg, dm).eval()
+    module = tiny_module(tiny_datamodule(max_frames=80)).eval()
     return module, dataset_motions(module, "val", embedded_data_root())[:3]
 
 
