@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import logging
 import os
 import sys
 from pathlib import Path
@@ -68,8 +69,6 @@ def trainer_parts(cfg: DictConfig) -> tuple[list, list]:
     callbacks = [instantiate(c) for c in (cfg.get("callbacks") or {}).values() if c is not None]
     if not loggers and any(isinstance(c, LearningRateMonitor) for c in callbacks):
         callbacks = [c for c in callbacks if not isinstance(c, LearningRateMonitor)]
-        import logging
-
         logging.getLogger(__name__).info("logger=none: the learning-rate monitor is left out (nothing to log to)")
     return loggers, callbacks
 
