@@ -118,7 +118,7 @@ def _inpaint_motions(module, motions, keeps, conds, num_samples, options, genera
     for k, m in enumerate(order):
         known[k, : lengths[k]] = torch.from_numpy(np.asarray(knowns[m], dtype=np.float32))
         keep[k, : lengths[k]] = torch.from_numpy(keeps[m])
-    known = (known.to(module.device) - module.mean) / module.std
+    known = module.normalise(known)
     cond = None if conds[0] is None else condition_batch(module, [conds[m] for m in order])
     out = inpaint(
         module, cond, known, keep, lengths, generator=generator, progress=progress, **options.inpaint_kwargs()

@@ -88,8 +88,7 @@ def low_noise_error(module, motions, t: int = 20, seed: int = 0) -> dict:
     pred, ident = [], []
     with torch.inference_mode():
         for m in motions:
-            x0 = torch.as_tensor(np.asarray(m.features), dtype=torch.float32, device=module.device) - module.mean
-            x0 = (x0 / module.std)[None]
+            x0 = module.normalise(torch.as_tensor(np.asarray(m.features), dtype=torch.float32))[None]
             tt = torch.full((1,), t, dtype=torch.long, device=module.device)
             noise = torch.randn(x0.shape, generator=gen).to(x0)
             xt = module.diffusion.q_sample(x0, tt, noise)

@@ -92,7 +92,7 @@ def reconstruct(module: MotionVAEModule, features: list[np.ndarray], batch_size:
     for s in range(0, len(features), batch_size):
         x, lengths = pad(features[s : s + batch_size])
         mask = torch.arange(x.shape[1])[None] < lengths[:, None]
-        recon = module.denormalise(module.reconstruct((x - module.mean) / module.std, mask))
+        recon = module.denormalise(module.reconstruct(module.normalise(x), mask))
         recons += [r[:n].numpy() for r, n in zip(recon, lengths.tolist(), strict=True)]
     return recons
 

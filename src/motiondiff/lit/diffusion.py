@@ -230,6 +230,10 @@ class MotionDiffusionModule(L.LightningModule):
     def default_guidance(self) -> float:
         return float(self.hparams.model.get("sample_guidance", 2.5))
 
+    def normalise(self, features: torch.Tensor) -> torch.Tensor:
+        """De-normalised features -> what the denoiser works on (the inverse of ``denormalise``)."""
+        return (features.to(self.mean) - self.mean) / self.std
+
     def denormalise(self, features: torch.Tensor) -> torch.Tensor:
         return features * self.std + self.mean
 

@@ -61,6 +61,7 @@ class MotionVAEModule(L.LightningModule):
     # The same optimiser/schedule, de-normalisation and joint decoding as the diffusion module (they only read
     # hparams.optim, the trainer's max_steps, mean/std and the representation, which this module has too).
     configure_optimizers = MotionDiffusionModule.configure_optimizers
+    normalise = MotionDiffusionModule.normalise
     denormalise = MotionDiffusionModule.denormalise
     joints = MotionDiffusionModule.joints
 
