@@ -99,7 +99,8 @@ def run(cfg: DictConfig) -> Path:
         print(f"{cfg.kind} ({cfg.mode}) of {cfg.input} ({motion.num_frames} frames) x {cfg.num_samples}: {what!r}")
         if cfg.kind == "inbetween":
             result = inbetween(module, motion, condition, prefix=_kept(cfg, "prefix", fps),
-                               suffix=_kept(cfg, "suffix", fps), close_root=bool(cfg.close_root), **sampling)  # fmt: skip
+                               suffix=_kept(cfg, "suffix", fps), close_root=bool(cfg.close_root),
+                               boundary_blend=cfg.boundary_blend, **sampling)  # fmt: skip
         else:
             result = edit_parts(module, motion, _parts(cfg), condition, **sampling)
     except EditError as err:

@@ -20,6 +20,7 @@ import numpy as np
 import torch
 
 from motiondiff.data.representations import Representation
+from motiondiff.edit.blend import DEFAULT_FRAMES, blend_boundaries
 from motiondiff.edit.inpaint import SamplingOptions, inpaint
 from motiondiff.edit.inputs import InputMotion
 from motiondiff.edit.masks import EditError, frame_keep, part_keep, resolve_joints, to_frames
@@ -157,6 +158,7 @@ def inbetween(
     generator: torch.Generator | None = None,
     seed: int | None = None,
     close_root: bool = True,
+    boundary_blend: int = DEFAULT_FRAMES,
     progress: bool = False,
     **sampling: Any,
 ) -> EditResult:
@@ -164,20 +166,26 @@ def inbetween(
 
     ``prefix``/``suffix``: frames (int) or a fraction of the motion (float <= 1); None: 25% each. ``condition``: a
     text, an action name/id, None (unconditioned), or a list with one per motion. ``num_samples`` edits per motion.
-    With HumanML3D features the generated root velocities are corrected (``close_root``, see
-    motiondiff.edit.trajectory) so that the kept end decodes where the input had it."""
+    The generated frames next to kept ones fade from the kept motion into the model's over ``boundary_blend`` frames
+    (motiondiff.edit.blend; 0: MDM's plain in-painting). With HumanML3D features the generated root velocities are
+    then corrected (``close_root``, see motiondiff.edit.trajectory) so that the kept end decodes where the input had
+    it."""
     motions, conds, options = _prepare(module, motion, condition, num_samples, sampling)
     settings = options.as_dict()
     rep: Representation = module.representation
     frames = [(to_frames(prefix, m.num_frames, "prefix"), to_frames(suffix, m.num_frames, "suffix")) for m in motions]
     kept_frames = [frame_keep(m.num_frames, p, s) for m, (p, s) in zip(motions, frames, strict=True)]
     keeps = [np.repeat(k[:, None], rep.dim, axis=1) for k in kept_frames]
+    if isinstance(boundary_blend, bool) or not isinstance(boundary_blend, int | np.integer) or boundary_blend < 0:
+        raise EditError(f"boundary_blend is a whole number of frames >= 0 (0: no blending), got {boundary_blend!r}")
     settings.update(kind="inbetween", prefix_frames=[p for p, _ in frames], suffix_frames=[s for _, s in frames],
-                    close_root=bool(close_root and needs_root_closure(rep)), seed=seed, num_samples=num_samples)  # fmt: skip
+                    close_root=bool(close_root and needs_root_closure(rep)), boundary_blend=int(boundary_blend),
+                    seed=seed, num_samples=num_samples)  # fmt: skip
     gen = _generator(module, generator, seed)
     features = _inpaint_motions(module, motions, keeps, conds, num_samples, options, gen, progress)
+    order = [m for m in range(len(motions)) for _ in range(num_samples)]
+    features = [blend_boundaries(f, kept_frames[m], int(boundary_blend)) for f, m in zip(features, order, strict=True)]
     if settings["close_root"]:
-        order = [m for m in range(len(motions)) for _ in range(num_samples)]
         features = [
             close_root_path(f, motions[m].features, ~kept_frames[m]) for f, m in zip(features, order, strict=True)
         ]

@@ -1,11 +1,11 @@
 """Does editing keep what it should and change what it should? Measurements on real test clips.
 
     python -m motiondiff.eval.editing [checkpoint=latest] [num_edits=20] [num_part_edits=10] [split=test]
-        [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [seed=0]
+        [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [boundary_blend=16] [seed=0]
         [data=<prepared folder>] [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
 
 (a) In-betweening of ``num_edits`` clips of the split (first and last 25% kept, each clip's own caption or action as
-    the condition): the largest decoded error on the kept frames (m), and per boundary the joint-speed jump
+    the condition, boundaries blended over ``boundary_blend`` frames, 0: plain in-painting): the largest decoded error on the kept frames (m), and per boundary the joint-speed jump
         ratio = speed of the step across the boundary / max(median step speed of the generated middle, 0.1 m/s),
     speed of a step = mean over joints of |x_{k+1} - x_k| · fps (m/s). A ratio near 1 is a seamless boundary; the
     report gives the largest ratio and the share <= 3. (The floor keeps a near-still middle from turning sensor-level
@@ -30,6 +30,8 @@ from pathlib import Path
 
 import numpy as np
 import torch
+
+from motiondiff.edit.blend import DEFAULT_FRAMES
 
 SPEED_FLOOR = 0.1  # m/s: the least "median generated speed" a boundary jump is divided by
 MAX_RATIO = 3.0  # a boundary step at most 3x the generated middle's typical speed counts as seamless
@@ -151,7 +153,8 @@ def walking_clips(module, split: str, count: int, data_root=None) -> list:
 
 
 def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, modes=("overwrite", "repaint"),
-                     text=DEFAULT_TEXT, parts="lower_body", data_root=None, seed=0, **sampling) -> dict:  # fmt: skip
+                     text=DEFAULT_TEXT, parts="lower_body", data_root=None, seed=0, boundary_blend=DEFAULT_FRAMES,
+                     **sampling) -> dict:  # fmt: skip
     """The numbers of the module docstring, per mode. ``sampling``: sampler, steps, eta, guidance, resample."""
     from motiondiff.data.representation_spec import bridge_from_spec
     from motiondiff.edit.api import edit_parts, inbetween
@@ -163,7 +166,8 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
     walks = walking_clips(module, split, num_part_edits, data_root)
     raise_cond = _raise_condition(module, text)
     inputs_up = [wrists_up_share(bridge.joints(m.features), bridge.feature_skeleton) for m in walks]
-    report = {"split": split, "fps": fps, "sampling": sampling, "seed": seed, "modes": {},
+    report = {"split": split, "fps": fps, "sampling": sampling, "seed": seed, "boundary_blend": boundary_blend,
+              "modes": {},
               "inbetween_clips": [m.source for m in clips], "parts_clips": [m.source for m in walks],
               "parts": parts, "text": raise_cond,
               "inputs_wrists_up": int(sum(s >= WRISTS_UP_SHARE for s in inputs_up)),
@@ -173,29 +177,19 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
         conds = [_clip_condition(module, m) for m in clips]
         if any(c is None for c in conds):
             conds = None  # a batch is conditioned or not
-        ib = inbetween(module, clips, conds, mode=mode, seed=seed, **sampling)
-        ib_rows = [edit_numbers(ib, i, fps) for i in range(len(ib))]
+        ib = inbetween(module, clips, conds, mode=mode, seed=seed, boundary_blend=boundary_blend, **sampling)
         # the same boundaries measured on the unedited clips: what a seamless in-betweening scores
         real = [b["ratio"] for m, k in zip(clips, ib.kept_frames, strict=True)
                 for b in boundary_jumps(m.joints, k, fps)["boundaries"]]  # fmt: skip
         report["inputs_boundary_ratio"] = {"max": max(real), "median": float(np.median(real)),
                                            "share_le_3": float(np.mean(np.array(real) <= MAX_RATIO))}  # fmt: skip
-        ratios = [b["ratio"] for r in ib_rows for b in r["boundaries"]]
         bp = edit_parts(module, walks, parts, [raise_cond] * len(walks), mode=mode, seed=seed, **sampling)
         bp_rows = [edit_numbers(bp, i, fps) for i in range(len(bp))]
         up = [wrists_up_share(bridge.joints(f), bridge.feature_skeleton) for f in bp.features]
         report["modes"][mode] = {
-            "inbetween": {
-                "edits": len(ib),
-                "conditioned_on": "clip captions/actions" if conds else "nothing (unconditioned)",
-                "max_kept_error_m": max(r["kept_max_error_m"] for r in ib_rows),
-                "max_boundary_ratio": max(ratios),
-                "median_boundary_ratio": float(np.median(ratios)),
-                "share_ratio_le_3": float(np.mean(np.array(ratios) <= MAX_RATIO)),
-                "median_middle_speed": float(np.median([r["median_generated_speed"] for r in ib_rows])),
-                "median_input_middle_speed": float(np.median([r["median_input_speed"] for r in ib_rows])),
-                "per_edit": [{"clip": m.source, **r} for m, r in zip(clips, ib_rows, strict=True)],
-            },
+            "inbetween": inbetween_summary(
+                ib, clips, fps, "clip captions/actions" if conds else "nothing (unconditioned)"
+            ),
             "parts": {
                 "edits": len(bp),
                 "max_root_relative_kept_error_m": max(r["root_relative_kept_max_error_m"] for r in bp_rows),
@@ -207,7 +201,30 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
             },
             "wall_s": time.perf_counter() - t0,
         }
+        if boundary_blend:  # the same edits without the blend (same seed, so the same samples before it)
+            plain = inbetween(module, clips, conds, mode=mode, seed=seed, boundary_blend=0, **sampling)
+            report["modes"][mode]["inbetween_plain"] = inbetween_summary(plain, clips, fps, "the same", per_edit=False)
     return report
+
+
+def inbetween_summary(result, clips, fps: float, conditioned_on: str, per_edit: bool = True) -> dict:
+    """The in-betweening numbers of the module docstring over the edits of ``result``."""
+    rows = [edit_numbers(result, i, fps) for i in range(len(result))]
+    ratios = np.array([b["ratio"] for r in rows for b in r["boundaries"]])
+    summary = {
+        "edits": len(result),
+        "conditioned_on": conditioned_on,
+        "boundary_blend": result.settings.get("boundary_blend", 0),
+        "max_kept_error_m": max(r["kept_max_error_m"] for r in rows),
+        "max_boundary_ratio": float(ratios.max()),
+        "median_boundary_ratio": float(np.median(ratios)),
+        "share_ratio_le_3": float(np.mean(ratios <= MAX_RATIO)),
+        "median_middle_speed": float(np.median([r["median_generated_speed"] for r in rows])),
+        "median_input_middle_speed": float(np.median([r["median_input_speed"] for r in rows])),
+    }
+    if per_edit:
+        summary["per_edit"] = [{"clip": m.source, **r} for m, r in zip(clips, rows, strict=True)]
+    return summary
 
 
 def markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
@@ -229,16 +246,19 @@ def format_report(report: dict, checkpoint: str = "") -> str:
         "",
         f"## (a) In-betweening: {ib0['edits']} {report['split']} clips, first and last 25% kept",
         "",
-        f"Conditioned on {ib0['conditioned_on']}. Ratio = speed of the step across a boundary / max(median step "
+        f"Conditioned on {ib0['conditioned_on']}; boundaries blended over {report.get('boundary_blend', 0)} frames "
+        "(motiondiff.edit.blend; 0: plain in-painting). Ratio = speed of the step across a boundary / max(median step "
         f"speed of the generated middle, {SPEED_FLOOR} m/s); step speed = mean joint displacement x fps.",
         "",
     ]
     rows = []
     for mode, r in report["modes"].items():
-        a = r["inbetween"]
-        rows.append([mode, f"{a['max_kept_error_m']:.2e}", f"{a['max_boundary_ratio']:.2f}",
-                     f"{a['median_boundary_ratio']:.2f}", f"{a['share_ratio_le_3']:.0%}",
-                     f"{a['median_middle_speed']:.2f}"])  # fmt: skip
+        for key, name in (("inbetween", mode), ("inbetween_plain", f"{mode}, no blend (plain in-painting)")):
+            if key in r:
+                a = r[key]
+                rows.append([name, f"{a['max_kept_error_m']:.2e}", f"{a['max_boundary_ratio']:.2f}",
+                             f"{a['median_boundary_ratio']:.2f}", f"{a['share_ratio_le_3']:.0%}",
+                             f"{a['median_middle_speed']:.2f}"])  # fmt: skip
     real = report["inputs_boundary_ratio"]
     rows.append(["unedited clips (reference)", "–", f"{real['max']:.2f}", f"{real['median']:.2f}",
                  f"{real['share_le_3']:.0%}", f"{first['median_input_middle_speed']:.2f}"])  # fmt: skip
@@ -276,7 +296,7 @@ def format_report(report: dict, checkpoint: str = "") -> str:
 
 
 KEYS = ("checkpoint", "num_edits", "num_part_edits", "split", "modes", "sampler", "steps", "eta", "guidance", "seed",
-        "data", "text", "parts", "out", "device", "resample")  # fmt: skip
+        "data", "text", "parts", "out", "device", "resample", "boundary_blend")  # fmt: skip
 
 
 def main(argv: list[str]) -> Path:
@@ -301,7 +321,7 @@ def main(argv: list[str]) -> Path:
             num_part_edits=int(args.get("num_part_edits", 10)),
             modes=tuple(args.get("modes", "overwrite,repaint").split(",")),
             text=args.get("text", DEFAULT_TEXT), parts=args.get("parts", "lower_body"), data_root=args.get("data"),
-            seed=int(args.get("seed", 0)), **sampling,
+            seed=int(args.get("seed", 0)), boundary_blend=int(args.get("boundary_blend", DEFAULT_FRAMES)), **sampling,
         )  # fmt: skip
     except EditError as err:
         raise UsageError(str(err)) from None
