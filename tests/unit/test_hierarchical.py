@@ -105,6 +105,30 @@ def test_latents_are_standardised_and_training_reaches_every_part(setup):
     assert not module.vaes.training
 
 
+def test_each_level_learns_the_configured_target_eps_by_default(setup):
+    """The paper's ε target by default; diffusion.prediction=v trains the same denoisers on v (vvMDM's weighting)."""
+    module, batch = setup
+    assert module.diffusion.prediction == "eps" and module.diffusion.weighting == "none"
+    v_module = HierarchicalLatentModule(dict(module.hparams.vaes), SIZE, {"steps": 100, "prediction": "v"},
+                                        {"lr": 1e-3}, node_dim=8, text_encoder={})  # fmt: skip
+    assert v_module.diffusion.prediction == "v" and v_module.diffusion.weighting == "snr_v"
+    v_module.load_state_dict(module.state_dict())
+    v_module.set_graph_table(module.graph_table)
+    z0 = module.batch_latents(batch)["motion"]
+    noise, t = torch.randn_like(z0), torch.full((z0.shape[0],), 70)
+    for m in (module, v_module):  # the loss is the diffusion's weighted loss on that target
+        out = torch.randn_like(z0)
+        target = m.diffusion.target(z0, noise, t)
+        w = m.diffusion.loss_weight(t)
+        expected = (w * ((target - out) ** 2).flatten(1).mean(1)).mean()
+        torch.testing.assert_close(m.diffusion.loss(out, z0, noise, t), expected)
+    torch.manual_seed(1)
+    eps_loss, _ = module._loss(batch, 0.0)
+    torch.manual_seed(1)
+    v_loss, _ = v_module._loss(batch, 0.0)
+    assert torch.isfinite(v_loss) and not torch.isclose(eps_loss, v_loss)
+
+
 def _window_keys(batch) -> set:
     return {(i, int(s), int(n)) for i, s, n in zip(batch["id"], batch["start"], batch["length"], strict=True)}
 

@@ -56,7 +56,10 @@ class HierarchicalLatentModule(L.LightningModule):
         betas = make_betas(diffusion.get("schedule", "linear"), int(diffusion.get("steps", 1000)),
                            beta_start=float(diffusion.get("beta_start", 8.5e-4)),
                            beta_end=float(diffusion.get("beta_end", 0.012)))  # fmt: skip
-        self.diffusion = GaussianDiffusion(betas, prediction="eps")
+        # the paper predicts ε; diffusion.prediction=v (with weighting=snr_v, vvMDM) is the option for small runs, whose
+        # ε-denoisers ignore their conditions at high noise (docs/results/guidedmotion/weight_control_levels.md)
+        self.diffusion = GaussianDiffusion(betas, prediction=str(diffusion.get("prediction", "eps")),
+                                           weighting=diffusion.get("weighting"))  # fmt: skip
         self.cond_drop_prob = float((condition or {}).get("drop_prob", 0.1))
         for level in LEVELS:
             shape = (tokens[level], latent_dim)
@@ -165,8 +168,8 @@ class HierarchicalLatentModule(L.LightningModule):
             t = torch.randint(0, self.diffusion.num_steps, (b,), device=self.device)
             noise = torch.randn_like(z0)
             previous = latents[PREVIOUS[level]] if PREVIOUS[level] else None
-            eps = self.denoiser(level, self.diffusion.q_sample(z0, t, noise), t, nodes, graphs.kinds, previous, drop)
-            parts[level] = (eps - noise).pow(2).mean()
+            out = self.denoiser(level, self.diffusion.q_sample(z0, t, noise), t, nodes, graphs.kinds, previous, drop)
+            parts[level] = self.diffusion.loss(out, z0, noise, t)  # ε: the plain ‖ε̂ − ε‖² mean
         return sum(parts.values()), parts
 
     def training_step(self, batch: dict, batch_idx: int) -> torch.Tensor:
