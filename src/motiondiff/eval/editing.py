@@ -5,7 +5,8 @@
         [data=<prepared folder>] [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
 
 (a) In-betweening of ``num_edits`` clips of the split (first and last 25% kept, each clip's own caption or action as
-    the condition, boundaries blended over ``boundary_blend`` frames, 0: plain in-painting): the largest decoded error on the kept frames (m), and per boundary the joint-speed jump
+    the condition, boundaries blended over ``boundary_blend`` frames; with a blend, the same edits also without it):
+    the largest decoded error on the kept frames (m), and per boundary the joint-speed jump
         ratio = speed of the step across the boundary / max(median step speed of the generated middle, 0.1 m/s),
     speed of a step = mean over joints of |x_{k+1} - x_k| · fps (m/s). A ratio near 1 is a seamless boundary; the
     report gives the largest ratio and the share <= 3. (The floor keeps a near-still middle from turning sensor-level
