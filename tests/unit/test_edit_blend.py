@@ -10,7 +10,7 @@ import pytest
 from fixtures.tiny_models import tiny_datamodule, tiny_module
 
 from motiondiff.edit.api import inbetween
-from motiondiff.edit.blend import blend_boundaries, blend_weights, gap_runs
+from motiondiff.edit.blend import blend_boundaries, blend_weights
 from motiondiff.edit.inputs import dataset_motions
 from motiondiff.edit.masks import EditError
 
@@ -25,11 +25,6 @@ def _kept(n: int, prefix: int, suffix: int) -> np.ndarray:
 def test_weights_start_at_one_and_fade_with_a_cosine():
     expected = [1.0, 0.5 * (1 + math.cos(math.pi / 4)), 0.5, 0.5 * (1 + math.cos(3 * math.pi / 4))]
     assert blend_weights(4).tolist() == pytest.approx(expected)
-
-
-def test_gap_runs():
-    assert gap_runs(np.array([True, False, False, True, True, False])) == [(0, 1), (3, 5)]
-    assert gap_runs(np.zeros(3, dtype=bool)) == []
 
 
 def test_hand_computed_offsets_on_a_small_gap():

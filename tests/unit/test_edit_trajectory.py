@@ -39,6 +39,7 @@ def _splice(known, other, generated):
 def test_gaps_are_runs_of_true():
     assert gaps(np.array([0, 1, 1, 0, 0, 1, 0, 1], dtype=bool)) == [(1, 3), (5, 6), (7, 8)]
     assert gaps(np.zeros(4, dtype=bool)) == []
+    assert gaps(np.array([True, False, False, True, True, False])) == [(0, 1), (3, 5)]  # also edit.blend's runs
 
 
 def test_closure_lands_the_suffix_on_the_input(clips):

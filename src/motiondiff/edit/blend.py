@@ -27,18 +27,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from motiondiff.edit.trajectory import gaps
+
 DEFAULT_FRAMES = 16  # chosen on the val split (module docstring); 0.8 s at HumanML3D's 20 fps
 
 
 def blend_weights(n: int) -> np.ndarray:
     """(n,) w_i = ½ (1 + cos(π i / n)): 1 at the boundary, fading towards 0 with zero slope."""
     return 0.5 * (1.0 + np.cos(np.pi * np.arange(n) / n))
-
-
-def gap_runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """[start, stop) of every run of True in a (N,) bool mask."""
-    edges = np.diff(np.concatenate([[0], np.asarray(mask).astype(np.int8), [0]]))
-    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(), strict=True))
 
 
 def _target(x: np.ndarray, kept: np.ndarray, edge: int, inner: int) -> np.ndarray:
@@ -59,7 +55,7 @@ def blend_boundaries(features: np.ndarray, kept_frames: np.ndarray, frames: int 
     if int(frames) != frames or frames < 0:
         raise ValueError(f"the boundary blend is a whole number of frames >= 0 (0: none), got {frames!r}")
     out = x.copy()
-    for a, b in gap_runs(~kept):
+    for a, b in gaps(~kept):
         n = min(int(frames), (b - a) // 2)
         if n < 1:
             continue
