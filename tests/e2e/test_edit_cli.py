@@ -136,6 +136,8 @@ def _run_in_process(ckpt, *overrides):
         ([f"input={CLIP_ID}", "prefix=2.5"], "prefix_s"),
         ([f"input={CLIP_ID}", "kind=dance"], "unknown kind 'dance'"),
         ([f"input={CLIP_ID}", "mode=paint"], "overwrite, repaint"),
+        ([f"input={CLIP_ID}", "hold_from=0"], r"hold_from .* \(0, 1\]"),
+        ([f"input={CLIP_ID}", "hold_from=half"], r"hold_from .* \(0, 1\]"),
         ([f"input={CLIP_ID}", "action=walk"], "use text="),
         ([f"input={CLIP_ID}", "length=10"], "longer than this model's maximum of 80"),
     ],
@@ -163,8 +165,11 @@ def test_cli_prints_one_line_and_exits_2(text_ckpt, tmp_path):
 def test_editing_evaluation_runs(text_ckpt, tmp_path):
     from motiondiff.eval.editing import main
 
-    out = main([f"checkpoint={text_ckpt}", "num_edits=3", "num_part_edits=2", "steps=3", f"out={tmp_path}"])
+    out = main([f"checkpoint={text_ckpt}", "num_edits=3", "num_part_edits=2", "steps=3", "hold_from=0.5",
+                f"out={tmp_path}"])  # fmt: skip
     report = json.loads((out / "report.json").read_text())
+    assert report["sampling"]["hold_from"] == 0.5 and "held at t < 0.5·T" in (out / "report.md").read_text()
+    assert 0 < report["inputs_median_smoothness"] <= 1
     assert set(report["modes"]) == {"overwrite", "repaint"} and "| repaint |" in (out / "report.md").read_text()
     assert all("walk" in c for c in report["parts_clips"]) and len(report["inbetween_clips"]) == 3
     low = report["low_noise"]
@@ -173,6 +178,7 @@ def test_editing_evaluation_runs(text_ckpt, tmp_path):
     for r in report["modes"].values():
         assert r["inbetween"]["max_kept_error_m"] <= TOL and r["parts"]["max_root_relative_kept_error_m"] <= TOL
         assert 0.0 <= r["inbetween"]["share_ratio_le_3"] <= 1.0 and r["parts"]["edits"] == 2
+        assert 0 < r["parts"]["median_smoothness"] <= 1
         assert len(r["inbetween"]["per_edit"]) == 3 and all(
             len(e["boundaries"]) == 2 for e in r["inbetween"]["per_edit"]
         )

@@ -122,8 +122,51 @@ def test_sampling_options_name_the_bad_value(module):
     with pytest.raises(ValueError, match="unknown sampling option.*resample"):
         SamplingOptions.from_kwargs({"resampel": 2})
     for bad, match in (({"sampler": "euler"}, "ddim, ddpm"), ({"steps": 0}, "between 1"), ({"resample": 0}, ">= 1"),
-                       ({"guidance": -1.0}, "guidance must be >= 0")):  # fmt: skip
+                       ({"guidance": -1.0}, "guidance must be >= 0"), ({"hold_from": 0.0}, r"hold_from .* \(0, 1\]"),
+                       ({"hold_from": 1.5}, r"hold_from .* \(0, 1\]")):  # fmt: skip
         with pytest.raises(ValueError, match=match):
             SamplingOptions(**bad).resolved(module, conditioned=True)
     assert SamplingOptions(guidance=3.0).resolved(module, conditioned=False).guidance is None
     assert SamplingOptions().resolved(module, conditioned=True).guidance == module.default_guidance
+
+
+def test_hooks_hold_the_known_part_only_below_their_noise_level():
+    """hold_from < 1: the hooks leave the steps at t >= below alone and hold the known part from there down."""
+    from motiondiff.diffusion.guidance import overwrite_known
+    from motiondiff.diffusion.process import GaussianDiffusion
+    from motiondiff.edit.inpaint import renoise_known
+
+    known, x = torch.ones(1, 4, 3), torch.zeros(1, 4, 3)
+    keep = torch.zeros(1, 4, 3, dtype=torch.bool)
+    keep[:, :2] = True
+    hook = overwrite_known(known, keep, below=50)
+    assert torch.equal(hook(x, 50), x) and torch.equal(hook(x, 99), x)
+    assert torch.equal(hook(x, 49), torch.where(keep, known, x))
+    assert torch.equal(overwrite_known(known, keep)(x, 99), torch.where(keep, known, x))  # no bound: every step
+    renoise = renoise_known(GaussianDiffusion.create(num_steps=100), known, keep, torch.Generator().manual_seed(0), 50)
+    assert torch.equal(renoise(x, 50), x)
+    held = renoise(x, 10)
+    assert torch.equal(held[~keep], x[~keep]) and not torch.equal(held[keep], x[keep])
+    assert torch.equal(renoise(x, -1), torch.where(keep, known, x))  # the clean result is always the input's
+
+
+@pytest.mark.parametrize("mode", ["overwrite", "repaint"])
+def test_hold_from_keeps_the_known_part_and_changes_only_the_generated_path(module, mode):
+    """Held over part of the chain, the result still keeps the known part exactly; hold_from=1 is the default path,
+    and a later hold gives a different generated part (the first steps ran free)."""
+    b, n, d = 1, 20, module.hparams.feature_dim
+    known = torch.randn(b, n, d, generator=torch.Generator().manual_seed(3))
+    keep = torch.zeros(b, n, d, dtype=torch.bool)
+    keep[..., : d // 2] = True
+    lengths = torch.full((b,), n)
+
+    def run(**kw):
+        return inpaint(module, None, known, keep, lengths, mode=mode, sampler="ddim", steps=10,
+                       generator=torch.Generator().manual_seed(0), **kw)  # fmt: skip
+
+    default, full, late = run(), run(hold_from=1.0), run(hold_from=0.3)
+    assert torch.equal(default, full)
+    assert torch.equal(late[keep], known[keep])
+    assert not torch.allclose(late[~keep], full[~keep])
+    with pytest.raises(ValueError, match="hold_from"):
+        run(hold_from=0.0)

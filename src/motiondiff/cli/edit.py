@@ -93,7 +93,7 @@ def run(cfg: DictConfig) -> Path:
                   f"(the model's maximum is {module.hparams.max_frames}; choose the window with start=/length=)")  # fmt: skip
         sampling = {"mode": cfg.mode, "num_samples": int(cfg.num_samples), "guidance": cfg.guidance,
                     "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta), "seed": int(cfg.seed),
-                    "resample": int(cfg.resample),
+                    "resample": int(cfg.resample), "hold_from": cfg.hold_from,
                     "progress": True}  # fmt: skip
         what = condition or "unconditioned"
         print(f"{cfg.kind} ({cfg.mode}) of {cfg.input} ({motion.num_frames} frames) x {cfg.num_samples}: {what!r}")

@@ -72,14 +72,17 @@ def guided_model_fn(
     return model_fn
 
 
-def overwrite_known(known: torch.Tensor, keep: torch.Tensor) -> X0Hook:
-    """An ``x0_hook`` for editing (MDM in-betweening, body-part editing): x̂0 ← where(keep, known, x̂0) at every step.
+def overwrite_known(known: torch.Tensor, keep: torch.Tensor, below: int | None = None) -> X0Hook:
+    """An ``x0_hook`` for editing (MDM in-betweening, body-part editing): x̂0 ← where(keep, known, x̂0) at every step
+    (or only at steps t < ``below``, so the first steps sample from the condition alone).
 
     ``keep`` is a bool tensor broadcastable to x (e.g. (B, N, 1) for frames, (1, 1, D) for feature dims); which
     frames or dims to keep is the caller's business (the representation knows the body parts).
     """
 
     def hook(x0_hat: torch.Tensor, t: int) -> torch.Tensor:
+        if below is not None and t >= below:
+            return x0_hat
         return torch.where(keep.to(x0_hat.device), known.to(x0_hat), x0_hat)
 
     return hook

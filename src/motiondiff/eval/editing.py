@@ -1,8 +1,8 @@
 """Does editing keep what it should and change what it should? Measurements on real test clips.
 
     python -m motiondiff.eval.editing [checkpoint=latest] [num_edits=20] [num_part_edits=10] [split=test]
-        [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [boundary_blend=16] [seed=0]
-        [data=<prepared folder>] [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
+        [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [boundary_blend=16] [hold_from=1]
+        [seed=0] [data=<prepared folder>] [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
 
 (a) In-betweening of ``num_edits`` clips of the split (first and last 25% kept, each clip's own caption or action as
     the condition, boundaries blended over ``boundary_blend`` frames; with a blend, the same edits also without it):
@@ -15,7 +15,7 @@
     split first, then val and train if it has too few) keeping ``lower_body`` (legs and root trajectory) with
     ``text``: the largest root-relative error of the kept joints (m), and how many edits have both wrists above the
     head - wrist y above head y on the feature skeleton (SMPL-22 via the representation's bridge) for >= 25% of the
-    frames - next to the same count on the unedited inputs.
+    frames - next to the same count on the unedited inputs, and the median smoothness (vvMDM) of the edits and inputs.
 (c) Both modes (overwrite, repaint) with the same seed, side by side. Writes report.md and report.json.
 
 The measurement functions are shared with ``edit.py`` (its results.json).
@@ -33,6 +33,7 @@ import numpy as np
 import torch
 
 from motiondiff.edit.blend import DEFAULT_FRAMES
+from motiondiff.edit.smoothing import smoothness_of_joints
 
 SPEED_FLOOR = 0.1  # m/s: the least "median generated speed" a boundary jump is divided by
 MAX_RATIO = 3.0  # a boundary step at most 3x the generated middle's typical speed counts as seamless
@@ -172,6 +173,8 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
               "inbetween_clips": [m.source for m in clips], "parts_clips": [m.source for m in walks],
               "parts": parts, "text": raise_cond,
               "inputs_wrists_up": int(sum(s >= WRISTS_UP_SHARE for s in inputs_up)),
+              "inputs_median_smoothness": float(np.median(
+                  [smoothness_of_joints(bridge.joints(m.features), bridge.feature_skeleton) for m in walks])),
               "low_noise": low_noise_error(module, clips, seed=seed)}  # fmt: skip
     for mode in modes:
         t0 = time.perf_counter()
@@ -187,6 +190,7 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
         bp = edit_parts(module, walks, parts, [raise_cond] * len(walks), mode=mode, seed=seed, **sampling)
         bp_rows = [edit_numbers(bp, i, fps) for i in range(len(bp))]
         up = [wrists_up_share(bridge.joints(f), bridge.feature_skeleton) for f in bp.features]
+        smooth = [smoothness_of_joints(bridge.joints(f), bridge.feature_skeleton) for f in bp.features]
         report["modes"][mode] = {
             "inbetween": inbetween_summary(
                 ib, clips, fps, "clip captions/actions" if conds else "nothing (unconditioned)"
@@ -196,9 +200,11 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
                 "max_root_relative_kept_error_m": max(r["root_relative_kept_max_error_m"] for r in bp_rows),
                 "max_kept_error_m": max(r["kept_max_error_m"] for r in bp_rows),
                 "wrists_up_edits": int(sum(s >= WRISTS_UP_SHARE for s in up)),
+                "median_smoothness": float(np.median(smooth)),
                 "per_edit": [
-                    {"clip": m.source, "wrists_up_share": s, **r} for m, s, r in zip(walks, up, bp_rows, strict=True)
-                ],  # fmt: skip
+                    {"clip": m.source, "wrists_up_share": s, "smoothness": sm, **r}
+                    for m, s, sm, r in zip(walks, up, smooth, bp_rows, strict=True)
+                ],
             },
             "wall_s": time.perf_counter() - t0,
         }
@@ -243,7 +249,7 @@ def format_report(report: dict, checkpoint: str = "") -> str:
         f"Checkpoint: `{checkpoint}`  ",
         f"Sampler: {s.get('sampler')} (steps {s.get('steps')}, eta {s.get('eta', 0.0)}, resample "
         f"{s.get('resample', 1)}), guidance {s.get('guidance') if s.get('guidance') is not None else 'model default'}, "
-        f"seed {report['seed']}",
+        f"known part held at t < {s.get('hold_from', 1.0):g}·T, seed {report['seed']}",
         "",
         f"## (a) In-betweening: {ib0['edits']} {report['split']} clips, first and last 25% kept",
         "",
@@ -279,25 +285,26 @@ def format_report(report: dict, checkpoint: str = "") -> str:
         f"## (b) Body-part editing: `{report['parts']}` kept on {n} walking clips, condition {report['text']!r}",
         "",
         f"Wrists up = both wrists above the head for >= {WRISTS_UP_SHARE:.0%} of the frames (feature skeleton). "
-        f"Unedited inputs with wrists up: {report['inputs_wrists_up']} of {n}.",
+        f"Unedited inputs with wrists up: {report['inputs_wrists_up']} of {n}. Smoothness: vvMDM's (1 = no "
+        f"acceleration), median over the edits; the unedited inputs: {report.get('inputs_median_smoothness', float('nan')):.4f}.",
         "",
     ]
     rows = []
     for mode, r in report["modes"].items():
         b = r["parts"]
         rows.append([mode, f"{b['max_root_relative_kept_error_m']:.2e}", f"{b['max_kept_error_m']:.2e}",
-                     f"{b['wrists_up_edits']} of {b['edits']}"])  # fmt: skip
+                     f"{b['wrists_up_edits']} of {b['edits']}", f"{b.get('median_smoothness', float('nan')):.4f}"])  # fmt: skip
     lines += markdown_table(
-        ["Mode", "Max root-relative kept-joint error (m)", "Max world kept-joint error (m)", "Edits with wrists up"],
-        rows,
-    )
+        ["Mode", "Max root-relative kept-joint error (m)", "Max world kept-joint error (m)", "Edits with wrists up",
+         "Smoothness"], rows,
+    )  # fmt: skip
     lines += ["", "Clips: in-betweening " + ", ".join(report["inbetween_clips"]),
               "", "Walking clips: " + ", ".join(report["parts_clips"]), ""]  # fmt: skip
     return "\n".join(lines)
 
 
 KEYS = ("checkpoint", "num_edits", "num_part_edits", "split", "modes", "sampler", "steps", "eta", "guidance", "seed",
-        "data", "text", "parts", "out", "device", "resample", "boundary_blend")  # fmt: skip
+        "data", "text", "parts", "out", "device", "resample", "boundary_blend", "hold_from")  # fmt: skip
 
 
 def main(argv: list[str]) -> Path:
@@ -311,7 +318,7 @@ def main(argv: list[str]) -> Path:
     ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
     module = load_module(ckpt, args.get("device", "cpu"))
     sampling = {"sampler": args.get("sampler", "ddim"), "eta": float(args.get("eta", 0.0)),
-                "resample": int(args.get("resample", 1))}  # fmt: skip
+                "resample": int(args.get("resample", 1)), "hold_from": float(args.get("hold_from", 1.0))}  # fmt: skip
     steps = args.get("steps", "50")
     sampling["steps"] = None if steps in ("null", "None") else int(steps)  # null: every step of the sampler
     if "guidance" in args:
