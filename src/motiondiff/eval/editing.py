@@ -157,7 +157,8 @@ def walking_clips(module, split: str, count: int, data_root=None) -> list:
 def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, modes=("overwrite", "repaint"),
                      text=DEFAULT_TEXT, parts="lower_body", data_root=None, seed=0, boundary_blend=DEFAULT_FRAMES,
                      **sampling) -> dict:  # fmt: skip
-    """The numbers of the module docstring, per mode. ``sampling``: sampler, steps, eta, guidance, resample."""
+    """The numbers of the module docstring, per mode. ``sampling``: sampler, steps, eta, guidance, resample,
+    hold_from."""
     from motiondiff.data.representation_spec import bridge_from_spec
     from motiondiff.edit.api import edit_parts, inbetween
     from motiondiff.edit.inputs import dataset_motions
