@@ -21,10 +21,21 @@ def cpu_model() -> str:
     return platform.processor() or "unknown"
 
 
+def allocator() -> str:
+    """The C allocator the process runs with: an LD_PRELOADed one (``make`` preloads tcmalloc where it is
+    installed) or glibc's."""
+    preload = os.environ.get("LD_PRELOAD", "")
+    for name in ("tcmalloc", "jemalloc"):
+        if name in preload:
+            return name
+    return "glibc malloc"
+
+
 def machine() -> dict:
     return {"cpu": cpu_model(), "cores": os.cpu_count(), "torch_threads": torch.get_num_threads(),
             "torch": torch.__version__, "cpu_capability": torch.backends.cpu.get_cpu_capability(),
-            "native_bf16": cpu_has_fast_bf16(), "python": platform.python_version(), "platform": platform.platform()}  # fmt: skip
+            "native_bf16": cpu_has_fast_bf16(), "allocator": allocator(), "python": platform.python_version(),
+            "platform": platform.platform()}  # fmt: skip
 
 
 def markdown(result: dict) -> str:
@@ -33,7 +44,8 @@ def markdown(result: dict) -> str:
         "# motiondiff benchmark",
         "",
         f"{m['cpu']}, {m['cores']} cores, {m['torch_threads']} torch threads, torch {m['torch']} "
-        f"({m['cpu_capability']}; native bf16: {m['native_bf16']}). `{result['command']}`, {result['date']}, "
+        f"({m['cpu_capability']}; native bf16: {m['native_bf16']}; allocator: {m.get('allocator', 'glibc malloc')}). "
+        f"`{result['command']}`, {result['date']}, "
         f"{result['wall_s']:.0f} s in all. Medians over repeats after a warm-up.",
         "",
         "| what | median | detail |",

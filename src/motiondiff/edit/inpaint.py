@@ -91,6 +91,12 @@ class SamplingOptions:
             del kwargs["guidance"]
         return kwargs
 
+    def sample_kwargs(self) -> dict:
+        """Keyword arguments of ``module.sample`` for a window with nothing to hold (no mode, no hold_from)."""
+        kwargs = self.inpaint_kwargs()
+        del kwargs["mode"], kwargs["hold_from"]
+        return kwargs
+
 
 def renoise_known(
     diffusion,

@@ -164,18 +164,18 @@ def generate_long(
 
     rep = module.representation
     mean, std = (t.detach().cpu().double().numpy() for t in (module.mean, module.std))
-    mode, kwargs = options.mode, {**options.inpaint_kwargs(), "progress": progress}
-    del kwargs["mode"]
+    held_kwargs = {**options.inpaint_kwargs(), "progress": progress}
+    free_kwargs = {**options.sample_kwargs(), "progress": progress}
     motion = np.zeros((num_samples, 0, module.hparams.feature_dim))
     windows = []
     for plan in plans:
         cond = segments[plan.segment][0]
         if plan.overlap == 0:
             lengths = torch.full((num_samples,), plan.length)
-            out = module.sample(cond, lengths, generator=generator, **kwargs)
+            out = module.sample(cond, lengths, generator=generator, **free_kwargs)
             window = Window(plan, _denormalise(out, mean, std), np.zeros(num_samples), np.zeros((num_samples, 3)))
         else:
-            window = _continue(module, motion, plan, cond, mean, std, mode=mode, generator=generator, **kwargs)
+            window = _continue(module, motion, plan, cond, mean, std, generator=generator, **held_kwargs)
         windows.append(window)
         placed = from_canonical(rep, window.features, window.yaw, window.offset)
         # the blended frames replace the motion's last ones (hml: rows before them decode unchanged)

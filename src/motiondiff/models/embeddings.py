@@ -7,6 +7,8 @@ import math
 import torch
 from torch import Tensor, nn
 
+from motiondiff.models.fast_dropout import FastDropout
+
 
 def _check_even(d_model: int) -> None:
     if d_model <= 0 or d_model % 2:
@@ -32,7 +34,7 @@ class SinusoidalPositionalEncoding(nn.Module):
         super().__init__()
         self.d_model = d_model
         self.max_len = max_len
-        self.dropout = nn.Dropout(dropout)
+        self.dropout = FastDropout(dropout)  # nn.Dropout with a cheaper mask (motiondiff.models.fast_dropout)
         # Not persistent: recomputed from (d_model, max_len), so checkpoints do not carry a 10 MB constant.
         pe = sinusoidal_features(torch.arange(max_len), d_model).unsqueeze(0)
         self.register_buffer("pe", pe, persistent=False)

@@ -5,14 +5,15 @@ from __future__ import annotations
 import torch
 from torch import Tensor, nn
 
+from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
 from motiondiff.models.embeddings import SinusoidalPositionalEncoding
 
 
 class TransEncBackbone(nn.Module):
     """[token, frames] + sinusoidal positions -> nn.TransformerEncoder -> frames (the token's output is dropped).
 
-    Post-norm layers as in MDM (PyTorch defaults). batch_first=True lets PyTorch use its fused inference fast path
-    and scaled_dot_product_attention.
+    Post-norm layers as in MDM (PyTorch defaults). batch_first=True lets PyTorch use its fused inference fast path;
+    training drops out with a cheaper mask (``FastDropoutEncoderLayer``, the same parameters).
     """
 
     def __init__(
@@ -30,7 +31,7 @@ class TransEncBackbone(nn.Module):
             raise ValueError(f"d_model={d_model} must be divisible by num_heads={num_heads}")
         self.d_model = d_model
         self.pos_encoding = SinusoidalPositionalEncoding(d_model, max_len=max_len, dropout=dropout)
-        layer = nn.TransformerEncoderLayer(
+        layer = FastDropoutEncoderLayer(
             d_model, num_heads, dim_feedforward=ff_size, dropout=dropout, activation=activation, batch_first=True
         )
         # No nested tensors: they are a prototype API (warns on every padded eval call); the fused fast path stays.

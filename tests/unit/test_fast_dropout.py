@@ -1,0 +1,106 @@
+"""FastDropout is dropout (keep rate, scale, expectation, gradient), and the encoder layer built on it computes what
+nn.TransformerEncoderLayer computes with the same weights (the reference path), in inference and in training."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+from torch import nn
+
+from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
+from motiondiff.models.fast_dropout import FastDropout, fast_dropout, keep_mask
+
+
+def test_keep_mask_keeps_one_minus_p_and_says_the_exact_probability():
+    torch.manual_seed(0)
+    for p in (0.1, 0.5, 0.9):
+        mask, keep = keep_mask((1000, 4003), p)  # an odd size: the last 64-bit word is used in part
+        assert mask.dtype == torch.bool and mask.shape == (1000, 4003)
+        assert abs(keep - (1 - p)) < 1 / 65536
+        assert abs(mask.float().mean().item() - keep) < 2e-3
+    for tiny in (0.0, 1e-7):  # rounds to keeping everything
+        mask, keep = keep_mask((10, 10), tiny)
+        assert mask.all() and keep == 1.0
+    with pytest.raises(ValueError, match=r"\[0, 1\)"):
+        keep_mask((3,), 1.0)
+
+
+def test_fast_dropout_is_unbiased_and_its_gradient_is_the_same_mask():
+    torch.manual_seed(0)
+    x = torch.ones(2000, 1000, requires_grad=True)
+    y = fast_dropout(x, 0.1)
+    _, keep = keep_mask((1,), 0.1)
+    values = torch.unique(y.detach())
+    assert len(values) == 2 and values[0] == 0 and abs(values[1].item() - 1 / keep) < 1e-6
+    assert abs(y.mean().item() - 1.0) < 3e-3  # E[y] = x
+    y.sum().backward()
+    torch.testing.assert_close(x.grad, y.detach())  # dy/dx = mask / keep, the same mask
+    assert torch.equal(fast_dropout(x, 0.1, training=False), x) and torch.equal(fast_dropout(x, 0.0), x)
+
+
+def test_fast_dropout_repeats_under_the_same_seed():
+    x = torch.randn(64, 64)
+    torch.manual_seed(3)
+    a = FastDropout(0.3).train()(x)
+    torch.manual_seed(3)
+    b = FastDropout(0.3).train()(x)
+    assert torch.equal(a, b) and not torch.equal(a, FastDropout(0.3).train()(x))
+    assert torch.equal(FastDropout(0.3).eval()(x), x)
+
+
+def _pair(dropout: float):
+    torch.manual_seed(0)
+    ref = nn.TransformerEncoderLayer(32, 4, 64, dropout, activation="gelu", batch_first=True)
+    fast = FastDropoutEncoderLayer(32, 4, 64, dropout, activation="gelu", batch_first=True)
+    fast.load_state_dict(ref.state_dict())  # the same parameters, the same names
+    return ref, fast
+
+
+def _inputs():
+    g = torch.Generator().manual_seed(1)
+    x = torch.randn(3, 11, 32, generator=g)
+    pad = torch.zeros(3, 11, dtype=torch.bool)
+    pad[1, 8:] = pad[2, 5:] = True  # padded keys
+    return x, pad
+
+
+@pytest.mark.parametrize("padded", [False, True])
+def test_inference_is_pytorchs_layer(padded):
+    ref, fast = _pair(0.1)
+    x, pad = _inputs()
+    with torch.inference_mode():
+        a = ref.eval()(x, src_key_padding_mask=pad if padded else None)
+        b = fast.eval()(x, src_key_padding_mask=pad if padded else None)
+    torch.testing.assert_close(b, a, atol=1e-6, rtol=0)
+
+
+@pytest.mark.parametrize("padded", [False, True])
+def test_training_pass_equals_the_reference_without_dropout(padded):
+    """With p = 0 the hand-written attention is the only difference: outputs and gradients agree to 1e-5, also
+    through nn.TransformerEncoder (which turns a bool padding mask into an additive float one)."""
+    ref, fast = _pair(0.0)
+    x, pad = _inputs()
+    outs, grads = [], []
+    for layer in (ref, fast):
+        enc = nn.TransformerEncoder(layer, num_layers=2, enable_nested_tensor=False).train()
+        y = enc(x, src_key_padding_mask=pad if padded else None)
+        valid = ~pad[..., None] if padded else torch.ones_like(y, dtype=torch.bool)
+        (y * valid).square().sum().backward()
+        outs.append(y[valid.expand_as(y)])
+        grads.append(torch.cat([p.grad.flatten() for p in enc.parameters()]))
+    torch.testing.assert_close(outs[1], outs[0], atol=1e-5, rtol=0)
+    torch.testing.assert_close(grads[1], grads[0], atol=1e-5, rtol=1e-4)
+
+
+def test_training_drops_the_attention_weights():
+    """Only the attention dropout on: the training output changes from call to call and differs from inference."""
+    _, fast = _pair(0.0)
+    fast.self_attn.dropout = 0.5
+    x, _ = _inputs()
+    torch.manual_seed(0)
+    a, b = fast.train()(x), fast.train()(x)
+    with torch.no_grad():
+        clean = fast.eval()(x)
+    assert not torch.allclose(a, b) and not torch.allclose(a, clean)
+    fast.self_attn.dropout = 0.0
+    torch.testing.assert_close(fast.train()(x), clean, atol=1e-5, rtol=0)
