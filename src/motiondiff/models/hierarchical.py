@@ -16,6 +16,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor, nn
 
+from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
 from motiondiff.models.embeddings import TimestepEmbedder
 from motiondiff.models.graph import NODE_KINDS, GraphBatch, SemanticGraphAttention
 from motiondiff.models.vae import LEVEL_TOKENS
@@ -54,7 +55,7 @@ class LatentDenoiser(nn.Module):
         if previous_tokens:
             self.previous_in = nn.Linear(latent_dim, d_model)
             self.previous_position = nn.Parameter(torch.randn(previous_tokens, d_model) * 0.02)
-        layer = nn.TransformerEncoderLayer(d_model, num_heads, ff_size, dropout, activation="gelu", batch_first=True)
+        layer = FastDropoutEncoderLayer(d_model, num_heads, ff_size, dropout, activation="gelu", batch_first=True)
         self.transformer = nn.TransformerEncoder(layer, num_layers, enable_nested_tensor=False)
         self.norm = nn.LayerNorm(d_model)
         self.out = nn.Linear(d_model, latent_dim)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor, nn
 
+from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
 from motiondiff.models.embeddings import SinusoidalPositionalEncoding
 
 LEVEL_TOKENS = {"motion": 2, "action": 4, "specific": 8}
@@ -24,7 +25,7 @@ class SkipTransformer(nn.Module):
             raise ValueError(f"a skip transformer needs an odd number of layers (in, middle, out), got {num_layers}")
 
         def layer():
-            return nn.TransformerEncoderLayer(d_model, num_heads, ff_size, dropout, activation="gelu", batch_first=True)
+            return FastDropoutEncoderLayer(d_model, num_heads, ff_size, dropout, activation="gelu", batch_first=True)
 
         half = num_layers // 2
         self.input_layers = nn.ModuleList(layer() for _ in range(half))
