@@ -168,14 +168,15 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
     clips = dataset_motions(module, split, data_root)[:num_edits]
     walks = walking_clips(module, split, num_part_edits, data_root)
     raise_cond = _raise_condition(module, text)
-    inputs_up = [wrists_up_share(bridge.joints(m.features), bridge.feature_skeleton) for m in walks]
+    skeleton = bridge.feature_skeleton
+    walk_joints = [bridge.joints(m.features) for m in walks]  # decoded once for both measures
+    inputs_up = [wrists_up_share(j, skeleton) for j in walk_joints]
     report = {"split": split, "fps": fps, "sampling": sampling, "seed": seed, "boundary_blend": boundary_blend,
               "modes": {},
               "inbetween_clips": [m.source for m in clips], "parts_clips": [m.source for m in walks],
               "parts": parts, "text": raise_cond,
               "inputs_wrists_up": int(sum(s >= WRISTS_UP_SHARE for s in inputs_up)),
-              "inputs_median_smoothness": float(np.median(
-                  [smoothness_of_joints(bridge.joints(m.features), bridge.feature_skeleton) for m in walks])),
+              "inputs_median_smoothness": float(np.median([smoothness_of_joints(j, skeleton) for j in walk_joints])),
               "low_noise": low_noise_error(module, clips, seed=seed)}  # fmt: skip
     for mode in modes:
         t0 = time.perf_counter()
@@ -190,8 +191,9 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
                                            "share_le_3": float(np.mean(np.array(real) <= MAX_RATIO))}  # fmt: skip
         bp = edit_parts(module, walks, parts, [raise_cond] * len(walks), mode=mode, seed=seed, **sampling)
         bp_rows = [edit_numbers(bp, i, fps) for i in range(len(bp))]
-        up = [wrists_up_share(bridge.joints(f), bridge.feature_skeleton) for f in bp.features]
-        smooth = [smoothness_of_joints(bridge.joints(f), bridge.feature_skeleton) for f in bp.features]
+        edited = [bridge.joints(f) for f in bp.features]
+        up = [wrists_up_share(j, skeleton) for j in edited]
+        smooth = [smoothness_of_joints(j, skeleton) for j in edited]
         report["modes"][mode] = {
             "inbetween": inbetween_summary(
                 ib, clips, fps, "clip captions/actions" if conds else "nothing (unconditioned)"
