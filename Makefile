@@ -40,29 +40,28 @@ train: setup allocator
 test: setup browser
 	$(PY) -m pytest -q
 
-# The HTML viewer's end-to-end test screenshots it in headless Chromium: install Debian's when it is missing and
-# apt-get can run (as root); otherwise say so in one line and go on (that test then skips with the reason).
+# Debian packages some targets want: $(call debian_package,<check that it is there>,<package>,<what for>,<else>)
+# installs <package> when the check fails and apt-get can run (as root); otherwise it says so in one line and goes on.
+define debian_package
+	@if $(1); then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		echo "installing Debian's $(2) $(3)"; \
+		( export DEBIAN_FRONTEND=noninteractive; apt-get install -y -qq $(2) >/dev/null 2>&1 || \
+		  { apt-get update -qq && apt-get install -y -qq $(2) >/dev/null; } ) || \
+			echo "note: could not install $(2); $(4)"; \
+	else echo "note: no $(2) and no root apt-get; $(4)"; fi
+endef
+
+# The HTML viewer's end-to-end test screenshots it in headless Chromium (that test skips with the reason without it).
 .PHONY: browser
 browser:
-	@if command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
-		command -v google-chrome >/dev/null 2>&1; then :; \
-	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-		echo "installing Debian's chromium for the HTML viewer test"; \
-		( export DEBIAN_FRONTEND=noninteractive; apt-get install -y -qq chromium >/dev/null 2>&1 || \
-		  { apt-get update -qq && apt-get install -y -qq chromium >/dev/null; } ) || \
-			echo "note: could not install chromium; the HTML viewer screenshot test will skip"; \
-	else echo "note: no chromium and no root apt-get; the HTML viewer screenshot test will skip"; fi
+	$(call debian_package,command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
+		command -v google-chrome >/dev/null 2>&1,chromium,for the HTML viewer test,the HTML viewer screenshot test will skip)
 
-# tcmalloc for training (above): install Debian's when it is missing and apt-get can run (as root); otherwise say so.
+# tcmalloc for training (above).
 .PHONY: allocator
 allocator:
-	@if ls /usr/lib/*/libtcmalloc_minimal.so.4 >/dev/null 2>&1; then :; \
-	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-		echo "installing Debian's tcmalloc (faster CPU training)"; \
-		( export DEBIAN_FRONTEND=noninteractive; apt-get install -y -qq libtcmalloc-minimal4 >/dev/null 2>&1 || \
-		  { apt-get update -qq && apt-get install -y -qq libtcmalloc-minimal4 >/dev/null; } ) || \
-			echo "note: could not install tcmalloc; training runs with glibc's allocator (slower)"; \
-	else echo "note: no tcmalloc and no root apt-get; training runs with glibc's allocator (slower)"; fi
+	$(call debian_package,ls /usr/lib/*/libtcmalloc_minimal.so.4 >/dev/null 2>&1,libtcmalloc-minimal4,(faster CPU training),training runs with glibc's allocator (slower))
 
 # Time training, the forward pass, sampling and text encoding on this machine (<= 10 min on 2 cores); writes
 # bench/results/latest.{json,md}. Run it on an otherwise idle machine: other work skews every row.
