@@ -138,6 +138,7 @@ def _run_in_process(ckpt, *overrides):
         ([f"input={CLIP_ID}", "mode=paint"], "overwrite, repaint"),
         ([f"input={CLIP_ID}", "hold_from=0"], r"hold_from .* \(0, 1\]"),
         ([f"input={CLIP_ID}", "hold_from=half"], r"hold_from .* \(0, 1\]"),
+        ([f"input={CLIP_ID}", "reconstruction=-2"], "reconstruction .* >= 0"),
         ([f"input={CLIP_ID}", "action=walk"], "use text="),
         ([f"input={CLIP_ID}", "length=10"], "longer than this model's maximum of 80"),
     ],
@@ -162,13 +163,23 @@ def test_cli_prints_one_line_and_exits_2(text_ckpt, tmp_path):
 
 
 # ---- the acceptance measurements ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("bad", ["hold_from=abc", "reconstruction=lots", "steps=many"])
+def test_editing_evaluation_names_a_bad_number(text_ckpt, bad):
+    from motiondiff.eval.editing import main
+
+    with pytest.raises(UsageError, match=bad.split("=")[0] + ".*number"):
+        main([f"checkpoint={text_ckpt}", bad])
+
+
 def test_editing_evaluation_runs(text_ckpt, tmp_path):
     from motiondiff.eval.editing import main
 
     out = main([f"checkpoint={text_ckpt}", "num_edits=3", "num_part_edits=2", "steps=3", "hold_from=0.5",
-                f"out={tmp_path}"])  # fmt: skip
+                "reconstruction=2", f"out={tmp_path}"])  # fmt: skip
     report = json.loads((out / "report.json").read_text())
     assert report["sampling"]["hold_from"] == 0.5 and "held at t < 0.5·T" in (out / "report.md").read_text()
+    assert report["sampling"]["reconstruction"] == 2.0 and "reconstruction guidance 2" in (out / "report.md").read_text()
+    assert all(0 < r["inbetween"]["median_smoothness"] <= 1 for r in report["modes"].values())
     assert 0 < report["inputs_median_smoothness"] <= 1
     assert set(report["modes"]) == {"overwrite", "repaint"} and "| repaint |" in (out / "report.md").read_text()
     assert all("walk" in c for c in report["parts_clips"]) and len(report["inbetween_clips"]) == 3

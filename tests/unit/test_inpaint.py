@@ -123,7 +123,9 @@ def test_sampling_options_name_the_bad_value(module):
         SamplingOptions.from_kwargs({"resampel": 2})
     for bad, match in (({"sampler": "euler"}, "ddim, ddpm"), ({"steps": 0}, "between 1"), ({"resample": 0}, ">= 1"),
                        ({"guidance": -1.0}, "guidance must be >= 0"), ({"hold_from": 0.0}, r"hold_from .* \(0, 1\]"),
-                       ({"hold_from": 1.5}, r"hold_from .* \(0, 1\]")):  # fmt: skip
+                       ({"hold_from": 1.5}, r"hold_from .* \(0, 1\]"),
+                       ({"reconstruction": -1.0}, "reconstruction .* >= 0"),
+                       ({"reconstruction": "strong"}, "reconstruction .* >= 0")):  # fmt: skip
         with pytest.raises(ValueError, match=match):
             SamplingOptions(**bad).resolved(module, conditioned=True)
     assert SamplingOptions(guidance=3.0).resolved(module, conditioned=False).guidance is None
@@ -170,3 +172,63 @@ def test_hold_from_keeps_the_known_part_and_changes_only_the_generated_path(modu
     assert not torch.allclose(late[~keep], full[~keep])
     with pytest.raises(ValueError, match="hold_from"):
         run(hold_from=0.0)
+
+
+def test_reconstruction_guidance_is_ho_et_al_formula():
+    """x̃0 = x̂0 − (w √ᾱ_t / 2) ∇_{x_t} ‖keep ⊙ (x_known − x̂0)‖², checked on x̂0 = c · x_t where the gradient is
+    −2c keep ⊙ (x_known − c x_t); run inside inference mode as the samplers do; steps at t >= below untouched."""
+    from motiondiff.diffusion.guidance import reconstruction_guidance
+
+    gen = torch.Generator().manual_seed(0)
+    x, known = torch.randn(2, 6, 4, generator=gen), torch.randn(2, 6, 4, generator=gen)
+    keep = torch.zeros(2, 6, 4, dtype=torch.bool)
+    keep[:, :2] = True
+    c, w, alpha_bar = 0.7, 3.0, 0.64
+    guide = reconstruction_guidance(known, keep, w, below=500)
+    with torch.inference_mode():
+        out = guide(lambda xt: c * xt, x, alpha_bar, 100)
+        above = guide(lambda xt: c * xt, x, alpha_bar, 500)
+    expected = c * x + w * alpha_bar**0.5 * c * keep * (known - c * x)
+    torch.testing.assert_close(out, expected)
+    torch.testing.assert_close(above, c * x)
+    assert not out.requires_grad
+
+
+def test_samplers_give_the_guide_each_steps_alpha_bar():
+    """The guide sees ᾱ of the noise level it guides (the original index, also on the respaced DDPM chain)."""
+    from motiondiff.diffusion.process import GaussianDiffusion
+
+    diffusion = GaussianDiffusion.create(num_steps=100)
+    for fn in (ddim_sample, ddpm_sample):
+        seen = []
+
+        def guide(predict, x, alpha_bar, t, seen=seen):
+            seen.append((t, alpha_bar))
+            return predict(x)
+
+        fn(diffusion, lambda x, t: torch.zeros_like(x), (1, 4, 3), steps=4, x0_guide=guide,
+           generator=torch.Generator().manual_seed(0))  # fmt: skip
+        assert [t for t, _ in seen] == [99, 66, 33, 0]
+        for t, alpha_bar in seen:
+            assert alpha_bar == pytest.approx(float(diffusion.alphas_cumprod[t]), rel=1e-6)
+
+
+@pytest.mark.parametrize("mode", ["overwrite", "repaint"])
+def test_reconstruction_keeps_the_known_part_and_moves_the_generated_one(module, mode):
+    """With reconstruction guidance the known part is still exact; 0 is the plain path; a weight changes the rest."""
+    b, n, d = 2, 20, module.hparams.feature_dim
+    known = torch.randn(b, n, d, generator=torch.Generator().manual_seed(4))
+    keep = torch.zeros(b, n, 1, dtype=torch.bool)
+    keep[:, :5] = keep[:, -5:] = True
+    lengths = torch.full((b,), n)
+
+    def run(**kw):
+        return inpaint(module, None, known, keep, lengths, mode=mode, sampler="ddim", steps=6,
+                       generator=torch.Generator().manual_seed(0), **kw)  # fmt: skip
+
+    plain, zero, guided = run(), run(reconstruction=0.0), run(reconstruction=5.0)
+    assert torch.equal(plain, zero)
+    assert torch.equal(guided[:, :5], known[:, :5]) and torch.equal(guided[:, -5:], known[:, -5:])
+    assert not torch.allclose(guided[:, 5:-5], plain[:, 5:-5])
+    with pytest.raises(ValueError, match="reconstruction"):
+        run(reconstruction=-1.0)

@@ -94,7 +94,7 @@ def run(cfg: DictConfig) -> Path:
         sampling = {"mode": cfg.mode, "num_samples": int(cfg.num_samples), "guidance": cfg.guidance,
                     "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta), "seed": int(cfg.seed),
                     "resample": int(cfg.resample), "hold_from": cfg.hold_from,
-                    "progress": True}  # fmt: skip
+                    "reconstruction": cfg.reconstruction, "progress": True}  # fmt: skip
         what = condition or "unconditioned"
         print(f"{cfg.kind} ({cfg.mode}) of {cfg.input} ({motion.num_frames} frames) x {cfg.num_samples}: {what!r}")
         if cfg.kind == "inbetween":

@@ -5,6 +5,8 @@ indices even when fewer steps are taken. Masks, conditions and guidance live in 
 ``x0_hook(x0_hat, t) -> x0_hat`` runs on every step's x̂0 (t the original step index, decreasing): editing overwrites
 the known part there (MDM). ``xt_hook(x_prev, t_prev) -> x_prev`` runs on every step's result, t_prev the original
 index of x_prev's noise level or -1 for the clean result: RePaint-style editing re-noises the known part there.
+``x0_guide(predict_x0, x_t, alpha_bar_t, t) -> x0_hat`` (before ``x0_hook``) replaces the plain x̂0 = predict_x0(x_t)
+with one that may differentiate through the network: reconstruction guidance (``guidance.reconstruction_guidance``).
 ``resample=U > 1`` (RePaint, Lugmayr et al. 2022, jump length 1) takes every step U times: after each of the first
 U − 1 tries, x_{t_prev} is noised back to x_t by q(x_t | x_{t_prev}) and the step is taken again, giving the model U
 looks at the hooked result so the generated part can agree with the known one. It costs U model calls per step.
@@ -24,6 +26,7 @@ from motiondiff.diffusion.process import GaussianDiffusion
 ModelFn = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
 X0Hook = Callable[[torch.Tensor, int], torch.Tensor]
 XtHook = Callable[[torch.Tensor, int], torch.Tensor]
+X0Guide = Callable[[Callable[[torch.Tensor], torch.Tensor], torch.Tensor, float, int], torch.Tensor]
 
 
 def select_timesteps(num_steps: int, steps: int | None = None) -> list[int]:
@@ -79,10 +82,14 @@ def _predict_x0(
     clip_x0: float | None,
     x0_hook: X0Hook | None,
     t_index: int,
+    x0_guide: X0Guide | None = None,
+    alpha_bar_t: float = 1.0,
 ) -> torch.Tensor:
-    x0 = diffusion.to_x0(model_fn(x, t_model), x, t_proc)
-    if clip_x0 is not None:
-        x0 = x0.clamp(-clip_x0, clip_x0)
+    def predict(x_t: torch.Tensor) -> torch.Tensor:
+        x0_hat = diffusion.to_x0(model_fn(x_t, t_model), x_t, t_proc)
+        return x0_hat if clip_x0 is None else x0_hat.clamp(-clip_x0, clip_x0)
+
+    x0 = predict(x) if x0_guide is None else x0_guide(predict, x, alpha_bar_t, t_index)
     return x0 if x0_hook is None else x0_hook(x0, t_index)
 
 
@@ -96,6 +103,7 @@ def ddpm_sample(
     generator: torch.Generator | None = None,
     x0_hook: X0Hook | None = None,
     xt_hook: XtHook | None = None,
+    x0_guide: X0Guide | None = None,
     clip_x0: float | None = None,
     progress: bool = False,
     steps: int | None = None,
@@ -121,7 +129,7 @@ def ddpm_sample(
         for u in range(resample if i > 0 else 1):
             if u > 0:
                 x = renoise_step(x, alpha_bar[i_proc], alpha_bar[i_proc - 1], generator)
-            x0 = _predict_x0(proc, model_fn, x, t_model, t_proc, clip_x0, x0_hook, kept[i])
+            x0 = _predict_x0(proc, model_fn, x, t_model, t_proc, clip_x0, x0_hook, kept[i], x0_guide, alpha_bar[i_proc])
             mean, _, log_var = proc.q_posterior(x0, x, t_proc)
             if i == 0:
                 x = mean
@@ -157,6 +165,7 @@ def ddim_sample(
     generator: torch.Generator | None = None,
     x0_hook: X0Hook | None = None,
     xt_hook: XtHook | None = None,
+    x0_guide: X0Guide | None = None,
     clip_x0: float | None = None,
     progress: bool = False,
     resample: int = 1,
@@ -179,7 +188,7 @@ def ddim_sample(
         for u in range(resample if i > 0 else 1):
             if u > 0:
                 x = renoise_step(x, alpha_bar[kept[i]], alpha_bar[kept[i - 1]], generator)
-            x0 = _predict_x0(diffusion, model_fn, x, t, t, clip_x0, x0_hook, kept[i])
+            x0 = _predict_x0(diffusion, model_fn, x, t, t, clip_x0, x0_hook, kept[i], x0_guide, alpha_bar[kept[i]])
             eps = diffusion.eps_from_x0(x0, x, t)
             x = c_x0 * x0 + c_eps * eps
             if sigma > 0:

@@ -8,7 +8,7 @@
 Inputs come from ``edit.inputs``; results hold de-normalised features, decoded joints of the representation's
 skeleton and the masks of what was kept. ``condition=None`` edits without a condition (the model's ∅ condition,
 guidance unused), also on text- or action-conditioned models. Sampling options (mode, guidance, sampler, steps, eta,
-resample, hold_from) are those of ``edit.inpaint.SamplingOptions``.
+resample, hold_from, reconstruction) are those of ``edit.inpaint.SamplingOptions``.
 """
 
 from __future__ import annotations

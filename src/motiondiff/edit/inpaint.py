@@ -14,7 +14,11 @@ t < hold_from · T: the first steps then sample from the condition alone, and th
 MDM's full hold, each step's x̂0 is drawn towards motions that go with the kept part, step after step, so on a
 small model a condition it never saw next to that kept part (raised hands over walking legs) fades as the steps
 add up (docs/results/editing/val_experiments.md). Holding later trades that harmonisation for following the condition.
-A model trained with ``known_conditioning`` (in-painting-aware) is also given the clean known part as an input.
+``reconstruction`` (w_r, 0: off, as MDM) adds reconstruction guidance (Ho et al. 2022) to either mode: each held step's
+x̂0 also moves by −(w_r √ᾱ_t / 2) ∇_{x_t} of its error on the known part, so the generated part moves with the
+known one rather than only being placed next to it (``diffusion.guidance.reconstruction_guidance``; one backward
+pass per step). A model trained with ``known_conditioning`` (in-painting-aware) is also given the clean known part
+as an input.
 ``resample=U`` (a sampler option, ``diffusion.samplers``) adds RePaint's resampling to either mode.
 """
 
@@ -25,7 +29,7 @@ from typing import Any, Literal
 
 import torch
 
-from motiondiff.diffusion.guidance import overwrite_known
+from motiondiff.diffusion.guidance import overwrite_known, reconstruction_guidance
 
 EditMode = Literal["overwrite", "repaint"]
 EDIT_MODES = ("overwrite", "repaint")
@@ -38,7 +42,8 @@ class SamplingOptions:
 
     ``guidance=None``: the model's default when conditioned, unused when not. ``steps=None``: every step of the
     sampler. ``resample``: RePaint's repeats per step (1: none). ``hold_from``: the known part is held at noise
-    levels t < hold_from · T (1: at every step, MDM; 0.3: over the last 30% of the chain)."""
+    levels t < hold_from · T (1: at every step, MDM; 0.3: over the last 30% of the chain). ``reconstruction``: the
+    weight w_r of reconstruction guidance over the held steps (0: none, MDM)."""
 
     mode: EditMode = "overwrite"
     guidance: float | None = None
@@ -47,6 +52,7 @@ class SamplingOptions:
     eta: float = 0.0
     resample: int = 1
     hold_from: float = 1.0
+    reconstruction: float = 0.0
 
     @classmethod
     def from_kwargs(cls, kwargs: dict, error: type[Exception] = ValueError) -> SamplingOptions:
@@ -72,14 +78,20 @@ class SamplingOptions:
                 f"hold_from is the share of the chain the known part is held over, in (0, 1] (1: every step, "
                 f"MDM), got {self.hold_from}"
             )
+        weight = self.reconstruction
+        if isinstance(weight, bool) or not isinstance(weight, int | float) or not 0 <= weight < float("inf"):
+            raise error(
+                f"reconstruction is the weight of reconstruction guidance, a number >= 0 (0: off, MDM), got {weight}"
+            )
         guidance = None
         if conditioned:
             guidance = module.default_guidance if self.guidance is None else float(self.guidance)
             if guidance < 0:
                 raise error(f"guidance must be >= 0, got {guidance}")
         return replace(
-            self, guidance=guidance, eta=float(self.eta), resample=int(self.resample), hold_from=float(self.hold_from)
-        )
+            self, guidance=guidance, eta=float(self.eta), resample=int(self.resample), hold_from=float(self.hold_from),
+            reconstruction=float(weight),
+        )  # fmt: skip
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -92,9 +104,9 @@ class SamplingOptions:
         return kwargs
 
     def sample_kwargs(self) -> dict:
-        """Keyword arguments of ``module.sample`` for a window with nothing to hold (no mode, no hold_from)."""
+        """Keyword arguments of ``module.sample`` for a window with nothing to hold (no mode, hold or guide)."""
         kwargs = self.inpaint_kwargs()
-        del kwargs["mode"], kwargs["hold_from"]
+        del kwargs["mode"], kwargs["hold_from"], kwargs["reconstruction"]
         return kwargs
 
 
@@ -129,11 +141,13 @@ def inpaint(
     *,
     mode: EditMode = "overwrite",
     hold_from: float = 1.0,
+    reconstruction: float = 0.0,
     generator: torch.Generator | None = None,
     **sample_kwargs: Any,
 ) -> torch.Tensor:
     """Sample normalised features (B, N, D) with ``module.sample`` that agree with ``known`` (B, N, D, normalised)
-    wherever ``keep`` (bool, broadcastable to (B, N, D)) is True, held at noise levels t < ``hold_from`` · T.
+    wherever ``keep`` (bool, broadcastable to (B, N, D)) is True, held at noise levels t < ``hold_from`` · T, with
+    reconstruction guidance of weight ``reconstruction`` there (0: none).
     ``sample_kwargs``: guidance, sampler, steps, eta, resample, progress (see ``MotionDiffusionModule.sample``)."""
     if mode not in EDIT_MODES:
         raise ValueError(f"unknown edit mode {mode!r}; choose from {', '.join(EDIT_MODES)}")
@@ -143,6 +157,8 @@ def inpaint(
     known = known.to(module.device, torch.float32)
     if not 0 < hold_from <= 1:
         raise ValueError(f"hold_from is a share of the chain in (0, 1] (1: every step), got {hold_from}")
+    if not 0 <= reconstruction < float("inf"):
+        raise ValueError(f"reconstruction is a guidance weight >= 0 (0: off), got {reconstruction}")
     keep = keep.to(module.device).expand(b, n, d)
     below = None if hold_from == 1 else round(hold_from * module.diffusion.num_steps)
     hooks = (
@@ -150,6 +166,8 @@ def inpaint(
         if mode == "overwrite"
         else {"xt_hook": renoise_known(module.diffusion, known, keep, generator, below)}
     )
+    if reconstruction > 0:
+        hooks["x0_guide"] = reconstruction_guidance(known, keep, reconstruction, below)
     # a model trained with known_conditioning also reads the known part directly (others ignore it)
     out = module.sample(cond, lengths, generator=generator, known=known, keep=keep, **hooks, **sample_kwargs)
     return torch.where(keep, known, out)

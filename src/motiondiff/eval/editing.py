@@ -2,6 +2,7 @@
 
     python -m motiondiff.eval.editing [checkpoint=latest] [num_edits=20] [num_part_edits=10] [split=test]
         [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [boundary_blend=16] [hold_from=1]
+        [reconstruction=0]
         [seed=0] [data=<prepared folder>] [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
 
 (a) In-betweening of ``num_edits`` clips of the split (first and last 25% kept, each clip's own caption or action as
@@ -158,7 +159,7 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
                      text=DEFAULT_TEXT, parts="lower_body", data_root=None, seed=0, boundary_blend=DEFAULT_FRAMES,
                      **sampling) -> dict:  # fmt: skip
     """The numbers of the module docstring, per mode. ``sampling``: sampler, steps, eta, guidance, resample,
-    hold_from."""
+    hold_from, reconstruction."""
     from motiondiff.data.representation_spec import bridge_from_spec
     from motiondiff.edit.api import edit_parts, inbetween
     from motiondiff.edit.inputs import dataset_motions
@@ -177,6 +178,8 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
               "parts": parts, "text": raise_cond,
               "inputs_wrists_up": int(sum(s >= WRISTS_UP_SHARE for s in inputs_up)),
               "inputs_median_smoothness": float(np.median([smoothness_of_joints(j, skeleton) for j in walk_joints])),
+              "inbetween_inputs_median_smoothness": float(np.median(
+                  [smoothness_of_joints(bridge.joints(m.features), skeleton) for m in clips])),
               "low_noise": low_noise_error(module, clips, seed=seed)}  # fmt: skip
     for mode in modes:
         t0 = time.perf_counter()
@@ -194,9 +197,10 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
         edited = [bridge.joints(f) for f in bp.features]
         up = [wrists_up_share(j, skeleton) for j in edited]
         smooth = [smoothness_of_joints(j, skeleton) for j in edited]
+        ib_smooth = [smoothness_of_joints(bridge.joints(f), skeleton) for f in ib.features]
         report["modes"][mode] = {
             "inbetween": inbetween_summary(
-                ib, clips, fps, "clip captions/actions" if conds else "nothing (unconditioned)"
+                ib, clips, fps, "clip captions/actions" if conds else "nothing (unconditioned)", ib_smooth
             ),
             "parts": {
                 "edits": len(bp),
@@ -217,8 +221,9 @@ def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, m
     return report
 
 
-def inbetween_summary(result, clips, fps: float, conditioned_on: str, per_edit: bool = True) -> dict:
-    """The in-betweening numbers of the module docstring over the edits of ``result``."""
+def inbetween_summary(result, clips, fps: float, conditioned_on: str, smoothness=None, per_edit: bool = True) -> dict:
+    """The in-betweening numbers of the module docstring over the edits of ``result`` (with the median of the
+    edits' ``smoothness`` when given: a jittery middle would lower it)."""
     rows = [edit_numbers(result, i, fps) for i in range(len(result))]
     ratios = np.array([b["ratio"] for r in rows for b in r["boundaries"]])
     summary = {
@@ -232,6 +237,8 @@ def inbetween_summary(result, clips, fps: float, conditioned_on: str, per_edit: 
         "median_middle_speed": float(np.median([r["median_generated_speed"] for r in rows])),
         "median_input_middle_speed": float(np.median([r["median_input_speed"] for r in rows])),
     }
+    if smoothness is not None:
+        summary["median_smoothness"] = float(np.median([v for v in smoothness if v is not None]))
     if per_edit:
         summary["per_edit"] = [{"clip": m.source, **r} for m, r in zip(clips, rows, strict=True)]
     return summary
@@ -243,6 +250,10 @@ def markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
     return lines + ["| " + " | ".join(row) + " |" for row in rows]
 
 
+def _smooth(value) -> str:
+    return "–" if value is None else f"{value:.4f}"
+
+
 def format_report(report: dict, checkpoint: str = "") -> str:
     s = report["sampling"]
     ib0 = first = next(iter(report["modes"].values()))["inbetween"]
@@ -252,7 +263,8 @@ def format_report(report: dict, checkpoint: str = "") -> str:
         f"Checkpoint: `{checkpoint}`  ",
         f"Sampler: {s.get('sampler')} (steps {s.get('steps')}, eta {s.get('eta', 0.0)}, resample "
         f"{s.get('resample', 1)}), guidance {s.get('guidance') if s.get('guidance') is not None else 'model default'}, "
-        f"known part held at t < {s.get('hold_from', 1.0):g}·T, seed {report['seed']}",
+        f"known part held at t < {s.get('hold_from', 1.0):g}·T, reconstruction guidance "
+        f"{s.get('reconstruction', 0.0):g}, seed {report['seed']}",
         "",
         f"## (a) In-betweening: {ib0['edits']} {report['split']} clips, first and last 25% kept",
         "",
@@ -268,13 +280,14 @@ def format_report(report: dict, checkpoint: str = "") -> str:
                 a = r[key]
                 rows.append([name, f"{a['max_kept_error_m']:.2e}", f"{a['max_boundary_ratio']:.2f}",
                              f"{a['median_boundary_ratio']:.2f}", f"{a['share_ratio_le_3']:.0%}",
-                             f"{a['median_middle_speed']:.2f}"])  # fmt: skip
+                             f"{a['median_middle_speed']:.2f}", _smooth(a.get("median_smoothness"))])  # fmt: skip
     real = report["inputs_boundary_ratio"]
     rows.append(["unedited clips (reference)", "–", f"{real['max']:.2f}", f"{real['median']:.2f}",
-                 f"{real['share_le_3']:.0%}", f"{first['median_input_middle_speed']:.2f}"])  # fmt: skip
+                 f"{real['share_le_3']:.0%}", f"{first['median_input_middle_speed']:.2f}",
+                 _smooth(report.get("inbetween_inputs_median_smoothness"))])  # fmt: skip
     lines += markdown_table(
         ["Mode", "Max kept-frame error (m)", "Max boundary ratio", "Median ratio", "Share of boundaries <= 3",
-         "Median middle speed (m/s)"], rows,
+         "Median middle speed (m/s)", "Median smoothness"], rows,
     )  # fmt: skip
     lines += ["", "A jittery generated middle makes every boundary ratio small: compare its speed with the input's."]
     if "low_noise" in report:
@@ -307,7 +320,8 @@ def format_report(report: dict, checkpoint: str = "") -> str:
 
 
 KEYS = ("checkpoint", "num_edits", "num_part_edits", "split", "modes", "sampler", "steps", "eta", "guidance", "seed",
-        "data", "text", "parts", "out", "device", "resample", "boundary_blend", "hold_from")  # fmt: skip
+        "data", "text", "parts", "out", "device", "resample", "boundary_blend", "hold_from",
+        "reconstruction")  # fmt: skip
 
 
 def main(argv: list[str]) -> Path:
@@ -320,12 +334,19 @@ def main(argv: list[str]) -> Path:
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
     ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
     module = load_module(ckpt, args.get("device", "cpu"))
-    sampling = {"sampler": args.get("sampler", "ddim"), "eta": float(args.get("eta", 0.0)),
-                "resample": int(args.get("resample", 1)), "hold_from": float(args.get("hold_from", 1.0))}  # fmt: skip
+
+    def number(key: str, default: str, kind=float):
+        try:
+            return kind(args.get(key, default))
+        except ValueError:
+            raise UsageError(f"{key} must be a {kind.__name__} number, got {args[key]!r}") from None
+
+    sampling = {"sampler": args.get("sampler", "ddim"), "eta": number("eta", "0"), "resample": number("resample", "1", int),
+                "hold_from": number("hold_from", "1"), "reconstruction": number("reconstruction", "0")}  # fmt: skip
     steps = args.get("steps", "50")
-    sampling["steps"] = None if steps in ("null", "None") else int(steps)  # null: every step of the sampler
+    sampling["steps"] = None if steps in ("null", "None") else number("steps", "50", int)  # null: every sampler step
     if "guidance" in args:
-        sampling["guidance"] = float(args["guidance"])
+        sampling["guidance"] = number("guidance", "0")
     try:
         report = evaluate_editing(
             module, split=args.get("split", "test"), num_edits=int(args.get("num_edits", 20)),

@@ -194,12 +194,14 @@ class MotionDiffusionModule(L.LightningModule):
         x0_hook=None,
         xt_hook=None,
         resample: int = 1,
+        x0_guide=None,
         known: torch.Tensor | None = None,
         keep: torch.Tensor | None = None,
     ) -> torch.Tensor:
         """Generate normalised features (B, max(lengths), D); frames past each length are padding. ``resample``:
-        RePaint's repeats per step for editing (see ``diffusion.samplers``). ``known``/``keep`` (B, N, D): the clean
-        known part of an edit, read by models trained with ``known_conditioning`` (ignored by others)."""
+        RePaint's repeats per step for editing; ``x0_hook``, ``xt_hook``, ``x0_guide``: see ``diffusion.samplers``.
+        ``known``/``keep`` (B, N, D): the clean known part of an edit, read by models trained with
+        ``known_conditioning`` (ignored by others)."""
         self.eval()
         b, n = len(lengths), int(lengths.max())
         mask = torch.arange(n, device=self.device)[None] < lengths.to(self.device)[:, None]
@@ -217,12 +219,13 @@ class MotionDiffusionModule(L.LightningModule):
         if sampler == "ddim":
             return ddim_sample(
                 self.diffusion, fn, shape, steps=steps or 50, eta=eta, generator=generator,
-                x0_hook=x0_hook, xt_hook=xt_hook, progress=progress, resample=resample, device=self.device,
+                x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress, resample=resample,
+                device=self.device,
             )  # fmt: skip
         if sampler == "ddpm":
             return ddpm_sample(
                 self.diffusion, fn, shape, steps=steps, generator=generator, x0_hook=x0_hook, xt_hook=xt_hook,
-                progress=progress, resample=resample, device=self.device,
+                x0_guide=x0_guide, progress=progress, resample=resample, device=self.device,
             )  # fmt: skip
         raise ValueError(f"unknown sampler {sampler!r}; choose ddpm or ddim")
 
