@@ -178,8 +178,10 @@ def test_editing_evaluation_runs(text_ckpt, tmp_path):
                 "reconstruction=2", f"out={tmp_path}"])  # fmt: skip
     report = json.loads((out / "report.json").read_text())
     assert report["sampling"]["hold_from"] == 0.5 and "held at t < 0.5·T" in (out / "report.md").read_text()
-    assert report["sampling"]["reconstruction"] == 2.0 and "reconstruction guidance 2" in (out / "report.md").read_text()
+    text = (out / "report.md").read_text()
+    assert report["sampling"]["reconstruction"] == 2.0 and "reconstruction guidance 2" in text
     assert all(0 < r["inbetween"]["median_smoothness"] <= 1 for r in report["modes"].values())
+    assert 0 <= report["inputs_change_ratio"]["share_le_3"] <= 1 and "Max change ratio" in text
     assert 0 < report["inputs_median_smoothness"] <= 1
     assert set(report["modes"]) == {"overwrite", "repaint"} and "| repaint |" in (out / "report.md").read_text()
     assert all("walk" in c for c in report["parts_clips"]) and len(report["inbetween_clips"]) == 3
