@@ -67,3 +67,12 @@ def test_evaluate_refuses_a_checkpoint_of_another_dataset(text_ckpt, tmp_path):
                    check=False)  # fmt: skip
     assert proc.returncode == 2
     assert "pass dataset=bandai_mini" in proc.stderr
+
+
+def test_evaluation_off_alone_trains_without_a_best_fid_checkpoint(tmp_path):
+    """``callbacks.evaluation=null`` is enough: the best-FID checkpoint (which nothing would feed) goes with it."""
+    proc = run_cli("train.py", *TINY, "trainer.max_steps=8", "trainer.check_val_every_n_epoch=1",
+                   "checkpoint_every=100", "callbacks.evaluation=null", env_dir=tmp_path)  # fmt: skip
+    run = next((tmp_path / "outputs").glob("train/*"))
+    assert (run / "checkpoints" / "last.ckpt").is_file() and not list(run.glob("checkpoints/best-fid-*"))
+    assert "no best-FID checkpoint either" in proc.stdout + proc.stderr

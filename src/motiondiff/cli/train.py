@@ -97,21 +97,26 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
 
 
 def evaluation_callbacks(callbacks: list) -> list:
-    """Leave out the generation evaluation and the best-FID checkpoint when the dataset has no evaluators."""
+    """Leave out the generation evaluation and the best-FID checkpoint when the dataset has no evaluators, and the
+    best-FID checkpoint when the evaluation is switched off (``callbacks.evaluation=null``): nothing logs val/fid."""
     from lightning.pytorch.callbacks import ModelCheckpoint
 
     from motiondiff.eval.callbacks import GenerationEvaluation
 
-    missing = [c for c in callbacks if isinstance(c, GenerationEvaluation) and not c.available]
-    if not missing:
-        return callbacks
-    log.warning(
-        "no evaluators in %s: training without FID/R-precision evaluation or best-FID checkpoint (make them with "
-        "`python -m motiondiff.eval.train_evaluator dataset=<name>`)",
-        missing[0].evaluator_dir,
-    )
+    evaluations = [c for c in callbacks if isinstance(c, GenerationEvaluation)]
+    missing = [c for c in evaluations if not c.available]
     needs_fid = [c for c in callbacks if isinstance(c, ModelCheckpoint) and (c.monitor or "").startswith("val/")
                  and c.monitor != "val/loss"]  # fmt: skip
+    if not missing and (evaluations or not needs_fid):
+        return callbacks
+    if missing:
+        log.warning(
+            "no evaluators in %s: training without FID/R-precision evaluation or best-FID checkpoint (make them "
+            "with `python -m motiondiff.eval.train_evaluator dataset=<name>`)",
+            missing[0].evaluator_dir,
+        )
+    else:
+        log.info("callbacks.evaluation is off: no best-FID checkpoint either (last.ckpt holds the final weights)")
     return [c for c in callbacks if c not in missing and c not in needs_fid]
 
 
