@@ -152,20 +152,26 @@ def test_hooks_hold_the_known_part_only_below_their_noise_level():
     assert torch.equal(renoise(x, -1), torch.where(keep, known, x))  # the clean result is always the input's
 
 
+def _edit_runner(module, mode: str, keep: torch.Tensor, seed: int, steps: int):
+    """(known, run): random known features shaped like ``keep`` and ``run(**options)`` in-painting them, same noise."""
+    b, n = keep.shape[:2]
+    known = torch.randn(b, n, module.hparams.feature_dim, generator=torch.Generator().manual_seed(seed))
+
+    def run(**kw):
+        return inpaint(module, None, known, keep, torch.full((b,), n), mode=mode, sampler="ddim", steps=steps,
+                       generator=torch.Generator().manual_seed(0), **kw)  # fmt: skip
+
+    return known, run
+
+
 @pytest.mark.parametrize("mode", ["overwrite", "repaint"])
 def test_hold_from_keeps_the_known_part_and_changes_only_the_generated_path(module, mode):
     """Held over part of the chain, the result still keeps the known part exactly; hold_from=1 is the default path,
     and a later hold gives a different generated part (the first steps ran free)."""
-    b, n, d = 1, 20, module.hparams.feature_dim
-    known = torch.randn(b, n, d, generator=torch.Generator().manual_seed(3))
-    keep = torch.zeros(b, n, d, dtype=torch.bool)
+    d = module.hparams.feature_dim
+    keep = torch.zeros(1, 20, d, dtype=torch.bool)
     keep[..., : d // 2] = True
-    lengths = torch.full((b,), n)
-
-    def run(**kw):
-        return inpaint(module, None, known, keep, lengths, mode=mode, sampler="ddim", steps=10,
-                       generator=torch.Generator().manual_seed(0), **kw)  # fmt: skip
-
+    known, run = _edit_runner(module, mode, keep, seed=3, steps=10)
     default, full, late = run(), run(hold_from=1.0), run(hold_from=0.3)
     assert torch.equal(default, full)
     assert torch.equal(late[keep], known[keep])
@@ -216,16 +222,9 @@ def test_samplers_give_the_guide_each_steps_alpha_bar():
 @pytest.mark.parametrize("mode", ["overwrite", "repaint"])
 def test_reconstruction_keeps_the_known_part_and_moves_the_generated_one(module, mode):
     """With reconstruction guidance the known part is still exact; 0 is the plain path; a weight changes the rest."""
-    b, n, d = 2, 20, module.hparams.feature_dim
-    known = torch.randn(b, n, d, generator=torch.Generator().manual_seed(4))
-    keep = torch.zeros(b, n, 1, dtype=torch.bool)
+    keep = torch.zeros(2, 20, 1, dtype=torch.bool)
     keep[:, :5] = keep[:, -5:] = True
-    lengths = torch.full((b,), n)
-
-    def run(**kw):
-        return inpaint(module, None, known, keep, lengths, mode=mode, sampler="ddim", steps=6,
-                       generator=torch.Generator().manual_seed(0), **kw)  # fmt: skip
-
+    known, run = _edit_runner(module, mode, keep, seed=4, steps=6)
     plain, zero, guided = run(), run(reconstruction=0.0), run(reconstruction=5.0)
     assert torch.equal(plain, zero)
     assert torch.equal(guided[:, :5], known[:, :5]) and torch.equal(guided[:, -5:], known[:, -5:])
