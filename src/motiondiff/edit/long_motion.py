@@ -144,7 +144,8 @@ def generate_long(
     ``num_samples`` (text features, action ids, or None). ``blend_s``: seconds at the end of each overlap that are
     cross-faded instead of held (0: hold all; 0.25 s took the largest seam step of the shipped cpu model from 3.0x
     to 2.3x its median step). ``sampling``: the options of ``SamplingOptions`` (mode, guidance, sampler, steps,
-    eta, resample, hold_from, reconstruction). Returns ``num_samples`` long motions of Σ round(seconds · fps) frames each."""
+    eta, resample, hold_from, reconstruction). Returns ``num_samples`` long motions of Σ round(seconds · fps) frames
+    each."""
     if not segments:
         raise ValueError("give at least one (condition, seconds) segment")
     conditioned = any(cond is not None for cond, _ in segments)
