@@ -82,8 +82,8 @@ def _predict_x0(
     clip_x0: float | None,
     x0_hook: X0Hook | None,
     t_index: int,
-    x0_guide: X0Guide | None = None,
-    alpha_bar_t: float = 1.0,
+    x0_guide: X0Guide | None,
+    alpha_bar_t: float,
 ) -> torch.Tensor:
     def predict(x_t: torch.Tensor) -> torch.Tensor:
         x0_hat = diffusion.to_x0(model_fn(x_t, t_model), x_t, t_proc)

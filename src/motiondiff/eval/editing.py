@@ -272,6 +272,12 @@ def markdown_table(header: list[str], rows: list[list[str]]) -> list[str]:
     return lines + ["| " + " | ".join(row) + " |" for row in rows]
 
 
+def _inbetween_rows(report: dict, plain_note: str = "") -> list[tuple[str, dict]]:
+    """(row name, in-betweening summary) per mode, with and without the boundary blend where both were run."""
+    return [(name, r[key]) for mode, r in report["modes"].items()
+            for key, name in (("inbetween", mode), ("inbetween_plain", f"{mode}, no blend{plain_note}")) if key in r]  # fmt: skip
+
+
 def _smooth(value) -> str:
     return "–" if value is None else f"{value:.4f}"
 
@@ -296,13 +302,10 @@ def format_report(report: dict, checkpoint: str = "") -> str:
         "",
     ]
     rows = []
-    for mode, r in report["modes"].items():
-        for key, name in (("inbetween", mode), ("inbetween_plain", f"{mode}, no blend (plain in-painting)")):
-            if key in r:
-                a = r[key]
-                rows.append([name, f"{a['max_kept_error_m']:.2e}", f"{a['max_boundary_ratio']:.2f}",
-                             f"{a['median_boundary_ratio']:.2f}", f"{a['share_ratio_le_3']:.0%}",
-                             f"{a['median_middle_speed']:.2f}", _smooth(a.get("median_smoothness"))])  # fmt: skip
+    for name, a in _inbetween_rows(report, " (plain in-painting)"):
+        rows.append([name, f"{a['max_kept_error_m']:.2e}", f"{a['max_boundary_ratio']:.2f}",
+                     f"{a['median_boundary_ratio']:.2f}", f"{a['share_ratio_le_3']:.0%}",
+                     f"{a['median_middle_speed']:.2f}", _smooth(a.get("median_smoothness"))])  # fmt: skip
     real = report["inputs_boundary_ratio"]
     rows.append(["unedited clips (reference)", "–", f"{real['max']:.2f}", f"{real['median']:.2f}",
                  f"{real['share_le_3']:.0%}", f"{first['median_input_middle_speed']:.2f}",
@@ -315,9 +318,8 @@ def format_report(report: dict, checkpoint: str = "") -> str:
               "", "Velocity change at each boundary (the larger change into or out of the boundary step, mean over "
               "joints, over the same scale): a kept part that ends in a fast movement makes a fast boundary step "
               "however seamless the edit, and only a seam changes the velocity there.", ""]  # fmt: skip
-    rows = [[name, f"{r[key]['max_change_ratio']:.2f}", f"{r[key]['share_change_le_3']:.0%}"]
-            for mode, r in report["modes"].items()
-            for key, name in (("inbetween", mode), ("inbetween_plain", f"{mode}, no blend")) if key in r]  # fmt: skip
+    rows = [[name, f"{a['max_change_ratio']:.2f}", f"{a['share_change_le_3']:.0%}"]
+            for name, a in _inbetween_rows(report)]  # fmt: skip
     if "inputs_change_ratio" in report:
         real = report["inputs_change_ratio"]
         rows.append(["unedited clips (reference)", f"{real['max']:.2f}", f"{real['share_le_3']:.0%}"])
