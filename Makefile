@@ -12,7 +12,7 @@ export HF_HOME := $(CURDIR)/.cache/huggingface
 export HF_HUB_OFFLINE := 1
 export TRANSFORMERS_OFFLINE := 1
 
-.PHONY: setup train test bench lint format data lock clean
+.PHONY: setup train test bench lint format data data-full lock clean
 
 # Training and the benchmark run with tcmalloc where it is installed (`make allocator` installs Debian's as root):
 # glibc returns every freed tensor above 32 MB to the kernel and page-faults it back in on the next step, which made
@@ -76,10 +76,17 @@ format: setup
 	$(VENV)/bin/ruff format src tests bench
 	$(VENV)/bin/ruff check --fix src tests bench
 
-# Rebuild the embedded dataset from the Bandai Namco zips (every content x style, two clips each where there are two, <= 4 s).
+# Rebuild the embedded dataset from the Bandai Namco zips (every content x style, two clips each where there are two, <= 4 s),
+# with the caption and split rules it was committed with (3 captions per clip, rare actions split like the rest).
 data: setup
 	$(PY) -m motiondiff.data.prepare bandai --src $(BANDAI)/bandai-ds1.zip --src $(BANDAI)/bandai-ds2.zip \
-		--out data/bandai_mini --per-group 2 --max-frames 80 --compact --seed 0 --force
+		--out data/bandai_mini --per-group 2 --max-frames 80 --compact --seed 0 --caption-variants 0 --rare-to-train 0 --force
+
+# The full Bandai Namco set (2,787 clips, ~450 MB, about 2 minutes) for dataset=bandai and experiment=bandai_text.
+data-full: setup
+	@test -f data/bandai/meta.json && echo "data/bandai is prepared (rm -r data/bandai to rebuild)" || \
+	$(PY) -m motiondiff.data.prepare bandai --src $(BANDAI)/bandai-ds1.zip --src $(BANDAI)/bandai-ds2.zip \
+		--out data/bandai --seed 0 --held-out data/paraphrases/bandai_human.json
 
 lock: setup
 	( echo "# Exact versions of every installed package (pip freeze of a working .venv); used as pip constraints by the Makefile."; \

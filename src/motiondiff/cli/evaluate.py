@@ -22,8 +22,15 @@ from tqdm import tqdm
 
 from motiondiff.cli.common import UsageError, find_checkpoint, to_dict
 from motiondiff.cli.validate import RULES_EVALUATE, check
-from motiondiff.eval import report
-from motiondiff.eval.protocol import EvalClips, Evaluators, generate, multimodality, replication_metrics
+from motiondiff.eval import action_table, report
+from motiondiff.eval.protocol import (
+    EvalClips,
+    Evaluators,
+    action_accuracy,
+    generate,
+    multimodality,
+    replication_metrics,
+)
 
 log = logging.getLogger(__name__)
 PROTOCOL = {"text": "text", "action": "action", "none": "unconstrained"}
@@ -49,8 +56,15 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None]:
     return guidance, steps
 
 
+def measures_action(kind: str, evaluators: Evaluators, clips: EvalClips) -> bool:
+    """Text models on labelled data with an action classifier: does the motion do the action its caption names?"""
+    return kind == "text" and evaluators.action is not None and clips.labelled
+
+
 def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict, dict, dict]:
-    """(rows {"Real": summary, "Model": summary}, per-replication values, timings)."""
+    """(rows {"Real": summary, "Model": summary}, per-replication values, timings). Text models on labelled data
+    also generate once per replication from each clip's label caption (`action_accuracy`, predictions kept in
+    timings["action_predictions"]); `action_accuracy_random` scores the motions of the random captions."""
     guidance, steps = _check(cfg, module)
     kind = module.condition_kind
     test = EvalClips.from_dataset(dm.dataset(cfg.split))
@@ -62,7 +76,13 @@ def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict,
     reps: dict[str, list[dict]] = {"Real": [], "Model": []}
     timings = {"generation_s": 0.0, "motions": 0}
     mm_n = min(cfg.mm_conditions, len(test))
-    total = cfg.replications * len(test) + min(cfg.mm_replications, cfg.replications) * mm_n * cfg.mm_repeats
+    with_action = bool(cfg.action_accuracy) and measures_action(kind, evaluators, test)
+    total = cfg.replications * len(test) * (2 if with_action else 1)
+    total += min(cfg.mm_replications, cfg.replications) * mm_n * cfg.mm_repeats
+    if with_action:
+        real_accuracy = action_accuracy(evaluators, real_test, test.actions)
+        timings["action_predictions"] = {"actions": test.actions.tolist(), "ids": test.ids, "model": [],
+                                         "real": real_test["action_logits"].argmax(-1).tolist()}  # fmt: skip
     with tqdm(total=total if kind != "none" else cfg.replications * len(test), desc="generating", unit="motion") as bar:
         for r in range(cfg.replications):
             seed = int(cfg.seed) + r
@@ -78,9 +98,21 @@ def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict,
                              progress=bar, **sampling)  # fmt: skip
             timings["generation_s"] += time.perf_counter() - start
             timings["motions"] += len(feats)
-            values = replication_metrics(kind, evaluators, real_test, evaluators.embed_motion(feats), text=text,
+            generated = evaluators.embed_motion(feats)
+            values = replication_metrics(kind, evaluators, real_test, generated, text=text,
                                          actions=test.actions, generated_features=evaluators.as_hml(feats), seed=seed,
                                          **common)  # fmt: skip
+            if with_action:
+                reps["Real"][-1].update(action_accuracy=real_accuracy, action_accuracy_random=real_accuracy)
+                values["action_accuracy_random"] = action_accuracy(evaluators, generated, test.actions)
+                start = time.perf_counter()
+                labelled = generate(module, test.label_captions(), test.lengths, cfg.batch_size, generator,
+                                    progress=bar, **sampling)  # fmt: skip
+                timings["generation_s"] += time.perf_counter() - start
+                timings["motions"] += len(labelled)
+                logits = evaluators.embed_motion(labelled)
+                values["action_accuracy"] = action_accuracy(evaluators, logits, test.actions)
+                timings["action_predictions"]["model"].append(logits["action_logits"].argmax(-1).tolist())
             if kind != "none" and r < cfg.mm_replications:
                 values["multimodality"] = _multimodality(cfg, module, evaluators, test, captions, mm_n, seed,
                                                          bar, sampling, timings)  # fmt: skip
@@ -103,6 +135,31 @@ def _multimodality(cfg, module, evaluators, test, captions, n, seed, bar, sampli
     key = evaluators.fid_features(module.condition_kind)
     emb = evaluators.embed_motion(feats)[key].reshape(n, cfg.mm_repeats, -1)
     return multimodality(emb, cfg.mm_pairs, seed)
+
+
+def _write_action_tables(out: Path, predictions: dict, evaluators: Evaluators, rows: dict, split: str) -> list[str]:
+    """action_accuracy.md (per action, generated from label captions vs real) and action_confusion.png; returns
+    the table's notes on the headline ratio."""
+    names = evaluators.meta["action"]["action_names"]
+    gen, real = rows["Model"]["action_accuracy"][0], rows["Real"]["action_accuracy"][0]
+    rand = rows["Model"]["action_accuracy_random"][0]
+    notes = [
+        f"action accuracy (the {split} clips' action classifier on motion generated from each clip's label caption): "
+        f"{gen:.3f} against {real:.3f} on the real clips, ratio {gen / max(real, 1e-9):.2f}; from random captions "
+        f"{rand:.3f} (ratio {rand / max(real, 1e-9):.2f}); per action: action_accuracy.md, action_confusion.png",
+    ]
+    asked = predictions["actions"]
+    per_action = action_table.per_action_rows(asked, predictions["model"], predictions["real"], names)
+    text = action_table.format_per_action(per_action, f"Action accuracy per action ({split}, label captions)", [
+        f"generated: {len(predictions['model'])} replications pooled; real: the classifier on the real clips",
+    ])  # fmt: skip
+    report.write_markdown(out / "action_accuracy.md", text)
+    gen_all = [a for _ in predictions["model"] for a in asked]
+    matrix = action_table.confusion(gen_all, [p for rep in predictions["model"] for p in rep], len(names))
+    action_table.plot_confusion(matrix, names, out / "action_confusion.png",
+                                f"motion generated from label captions ({split})")  # fmt: skip
+    print("\n" + text)
+    return notes
 
 
 def _log_wandb(out: Path, cfg: DictConfig, rows: dict, extra: dict) -> None:
@@ -157,6 +214,9 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
         f"{timings['motions']} motions generated in {timings['generation_s']:.0f} s; whole evaluation {wall:.0f} s",
         "Real: real test clips scored against the real train clips",
     ]
+    predictions = timings.pop("action_predictions", None)
+    if predictions is not None:
+        notes += _write_action_tables(out, predictions, evaluators, rows, cfg.split)
     text = report.format_markdown(table, protocol, title="Evaluation", notes=notes)
     report.write_markdown(out / "table.md", text)
     report.write_csv(out / "table.csv", table, protocol)

@@ -90,12 +90,15 @@ def train_action(cfg: DictConfig, dm: MotionDataModule) -> ActionClassifierGRU:
     return classifier.eval()
 
 
-def test_checks(evaluators: Evaluators, dm: MotionDataModule, replications: int = 20, seed: int = 0) -> dict:
-    """The sanity checks of a released evaluator on real test clips (no generated motion involved)."""
-    test = EvalClips.from_dataset(dm.dataset("test"))
+def test_checks(
+    evaluators: Evaluators, dm: MotionDataModule, replications: int = 20, seed: int = 0, split: str = "test"
+) -> dict:
+    """The sanity checks of a released evaluator on real clips of a split (no generated motion involved); on val
+    they are what sizes are chosen by, on test they are reported."""
+    test = EvalClips.from_dataset(dm.dataset(split))
     train = EvalClips.from_dataset(dm.dataset("train"))
     real_test, real_train = evaluators.embed_motion(test.features), evaluators.embed_motion(train.features)
-    out: dict = {"test_clips": len(test)}
+    out: dict = {f"{split}_clips": len(test)}
     if evaluators.text_motion is not None:
         reversed_test = evaluators.embed_motion([time_reversed(f, dm.num_joints) for f in test.features])
         rng = np.random.default_rng(seed)
@@ -112,6 +115,16 @@ def test_checks(evaluators: Evaluators, dm: MotionDataModule, replications: int 
         stats = [M.gaussian_statistics(e["action_features"]) for e in (real_test, real_train)]
         out["action_fid_test_vs_train"] = M.frechet_distance(*stats[0], *stats[1])
     return out
+
+
+def _overrides(cfg: DictConfig) -> list[str]:
+    """The command line's overrides (so the release records how it was trained), or the dataset and size."""
+    try:
+        from hydra.core.hydra_config import HydraConfig
+
+        return list(HydraConfig.get().overrides.task)
+    except ValueError:  # not run through Hydra
+        return [f"dataset={cfg.dataset.name}", f"evaluator_model={cfg.evaluator_model.name}"]
 
 
 def run(cfg: DictConfig) -> Path:
@@ -135,11 +148,10 @@ def run(cfg: DictConfig) -> Path:
         models["action"] = train_action(cfg, dm)
     evaluators = Evaluators(models.get("text_motion"), models.get("action"), dm.num_joints)
     checks = test_checks(evaluators, dm, seed=cfg.seed)
+    val_checks = test_checks(evaluators, dm, seed=cfg.seed, split="val")
     out = Path(cfg.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    command = "python -m motiondiff.eval.train_evaluator " + " ".join(
-        f"{k}={v}" for k, v in (("dataset", cfg.dataset.name), ("evaluator_model", cfg.evaluator_model.name))
-    )
+    command = "python -m motiondiff.eval.train_evaluator " + " ".join(_overrides(cfg))
     for kind, model in models.items():
         meta = {
             "dataset": cfg.dataset.name,
@@ -148,11 +160,12 @@ def run(cfg: DictConfig) -> Path:
             "action_names": list(getattr(dm, "action_names", []) or []) if kind == "action" else None,
             "training": model.train_info,
             "test_checks": checks,
+            "val_checks": val_checks,
             "command": command,
             "git_commit": _git_commit(),
         }
         save_released(model, out / kind, meta)
     print(f"\nevaluators written to {out}")
-    for k, v in checks.items():
+    for k, v in {**val_checks, **checks}.items():
         print(f"  {k:>26}: {v:.4g}" if isinstance(v, float) else f"  {k:>26}: {v}")
     return out

@@ -4,15 +4,18 @@ Captions are built from two sources and are always marked as generated wherever 
 - the clip's labels (content such as "walk-turn-left", style such as "tired"), through the phrase tables below;
 - what the motion measurably does, from its canonical 22-joint positions (facing +Z at frame 0, x = left, y = up):
   distance and direction travelled, net turn, speed, and which hands rise above the head or shoulders.
-Several phrasings per clip let text-conditioned training see varied wording, as with HumanML3D's 3+ captions.
+Several phrasings per clip let text-conditioned training see varied wording, as with HumanML3D's 3+ captions; with
+`variants`, many more from `caption_wording` (synonyms, body-part wording, tenses, sentence shapes).
 """
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass
 
 import numpy as np
 
+from motiondiff.data.caption_wording import varied_captions
 from motiondiff.skeleton import SMPL22
 
 GENERATED_NOTE = "generated from labels and measured motion; not human-written"
@@ -167,13 +170,34 @@ def _turn_phrase(turn: float) -> str:
 SUBJECTS = ("a person", "someone", "a man", "a woman", "the person")
 
 
-def generate_captions(content: str, style: str, facts: MotionFacts, rng: np.random.Generator) -> list[str]:
-    """Three phrasings for one clip: labels only, labels + measured details, measured only. All generated."""
+def normalise_caption(text: str) -> str:
+    """Lower case, single spaces, no final full stop: how captions are compared with a held-out set."""
+    return " ".join(text.lower().split()).rstrip(".")
+
+
+def generate_captions(
+    content: str,
+    style: str,
+    facts: MotionFacts,
+    rng: np.random.Generator,
+    variants: int = 0,
+    held_out: Collection[str] = frozenset(),
+) -> list[str]:
+    """Phrasings for one clip, all generated: labels only (first: the label caption evaluation uses), labels +
+    measured details, measured only, then `variants` sentences in varied wording (`caption_wording`).
+    `held_out` (normalised with `normalise_caption`): sentences that must never be a training caption, such as an
+    evaluation's human-written paraphrases; one the generator happens to produce is left out (the label caption
+    takes another subject)."""
     verb = CONTENT_PHRASES.get(content, content.replace("-", " ") + "s")
     manner = STYLE_PHRASES.get(style, f"in a {style.replace('-', ' ')} style")
     subjects = [str(s) for s in rng.choice(SUBJECTS, size=3, replace=False)]
     details = _detail_phrases(facts)
-    captions = [_sentence(subjects[0], verb, manner)]
+    label_caption = _sentence(subjects[0], verb, manner)
+    for subject in SUBJECTS:
+        if normalise_caption(label_caption) not in held_out:
+            break
+        label_caption = _sentence(subject, verb, manner)
+    captions = [label_caption]
     if details:
         captions.append(_sentence(subjects[1], verb, manner, ", ".join(details)))
     travel = (
@@ -182,7 +206,9 @@ def generate_captions(content: str, style: str, facts: MotionFacts, rng: np.rand
         else "stays in place"
     )
     captions.append(_sentence(subjects[2], travel, "", ", ".join(d for d in details if not d.startswith("moving"))))
-    return captions
+    if variants:
+        captions += [c for c in varied_captions(content, style, rng, variants + 3) if c not in captions][:variants]
+    return [c for c in captions[:1]] + [c for c in captions[1:] if normalise_caption(c) not in held_out]
 
 
 def _detail_phrases(facts: MotionFacts) -> list[str]:

@@ -229,18 +229,30 @@ def joints_from_features(features: np.ndarray, num_joints: int | None = None) ->
 
 
 # ---- normalisation ----------------------------------------------------------------------------------------------
-FEATURE_STD_BIAS = 5.0  # HumanML3D divides the std of the root and contact blocks by 5 so they weigh more
+# Text-to-motion's evaluators (Guo et al. 2022, `feat_bias`) divide the std of the root and contact blocks by 5 so
+# those few dims weigh more in the evaluator's input. The dataset's own Std.npy (HumanML3D) does not: models train on it.
+EVALUATOR_STD_BIAS = 5.0
+_ROOT_AND_CONTACT = ("root_rot_vel", "root_lin_vel", "root_y", "contacts")
 
 
 def mean_std(features: np.ndarray, num_joints: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Mean/Std the HumanML3D way: per-dim mean; std averaged within each block (root rotation velocity, root
-    linear velocity, root height, positions, rotations, velocities, contacts), root and contact blocks / 5."""
+    """Mean/Std as HumanML3D's Mean.npy/Std.npy: per-dim mean; std averaged within each block (root rotation
+    velocity, root linear velocity, root height, positions, rotations, velocities, contacts), nothing reweighted."""
     features = np.asarray(features, dtype=np.float64)
     j = num_joints or skeleton_for_dim(features.shape[-1]).num_joints
     mean = features.mean(axis=0)
     raw = features.std(axis=0)
     std = np.empty_like(raw)
-    for name, sl in feature_slices(j).items():
-        bias = 1.0 if name in ("ric", "rot6d", "local_vel") else FEATURE_STD_BIAS
-        std[sl] = raw[sl].mean() / bias
+    for sl in feature_slices(j).values():
+        std[sl] = raw[sl].mean()
     return mean.astype(np.float32), std.astype(np.float32)
+
+
+def evaluator_std(std: np.ndarray, num_joints: int | None = None) -> np.ndarray:
+    """The T2M evaluator's normalisation from a dataset's Std: root and contact blocks / 5 (its `feat_bias`)."""
+    std = np.array(std, dtype=np.float32, copy=True)
+    j = num_joints or skeleton_for_dim(std.shape[-1]).num_joints
+    for name, sl in feature_slices(j).items():
+        if name in _ROOT_AND_CONTACT:
+            std[..., sl] /= EVALUATOR_STD_BIAS
+    return std

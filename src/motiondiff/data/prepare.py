@@ -13,6 +13,7 @@ the previous dataset or the new one, never a mixture of half-written files.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
 import sys
@@ -27,7 +28,7 @@ from tqdm import tqdm
 from motiondiff.atomic import atomic_write
 from motiondiff.data import bandai
 from motiondiff.data.bvh import BVHError, parse_bvh
-from motiondiff.data.captions import GENERATED_NOTE, generate_captions
+from motiondiff.data.captions import GENERATED_NOTE, generate_captions, normalise_caption
 from motiondiff.data.features import mean_std
 from motiondiff.data.joint_map import JointMap
 from motiondiff.data.prepared import SPLITS, fill_derived, save_split
@@ -39,7 +40,7 @@ from motiondiff.data.processing import (
     process_motion,
 )
 from motiondiff.data.sources import Source, SourceError
-from motiondiff.data.splits import stratified_split, stratified_subset
+from motiondiff.data.splits import rare_to_train, stratified_split, stratified_subset
 
 
 class PrepareError(ValueError):
@@ -103,8 +104,14 @@ def prepare_bandai(
     workers: int | None = None,
     force: bool = False,
     progress: bool = True,
+    caption_variants: int = 12,
+    rare_to_train: int = 3,
+    held_out: list[str | Path] = (),
 ) -> dict:
-    """Prepare Bandai Namco releases into `out`; returns the report (also saved as report.json)."""
+    """Prepare Bandai Namco releases into `out`; returns the report (also saved as report.json).
+    `caption_variants`: generated sentences in varied wording per clip, beside the three label/measured ones;
+    `rare_to_train`: every clip of a content label with fewer clips than this goes to train (0: none);
+    `held_out`: JSON files of descriptions ({"descriptions": [{"text": ...}]}) no generated caption may equal."""
     out = Path(out)
     check_output(out, force)
     joint_map = JointMap.load("bandai_to_smpl22")
@@ -115,7 +122,9 @@ def prepare_bandai(
         skipped += [(s.name, s.reason) for s in bad]
     if not clips:
         raise PrepareError("no usable clips in " + ", ".join(map(str, sources)))
-    options = {"compact": compact, "per_group": per_group, "max_frames": max_frames, "seed": seed}
+    options = {"compact": compact, "per_group": per_group, "max_frames": max_frames, "seed": seed,
+               "caption_variants": caption_variants, "rare_to_train": rare_to_train,
+               "held_out": [str(p) for p in held_out]}  # fmt: skip
     meta = {"captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}
     report = process_and_write(clips, skipped, sources, out, joint_map, options, meta, workers, progress)
     _write_license_and_readme(out, sources, report)
@@ -149,11 +158,14 @@ def process_and_write(
         reasons = "; ".join(f"{n}: {r}" for n, r in skipped[:5])
         raise PrepareError(f"none of the {len(clips)} clip(s) could be used ({reasons})")
     split_of = stratified_split([c.name for c, _, _ in kept], [g for _, g, _ in kept], seed)
+    split_of = rare_to_train(split_of, [c.content for c, _, _ in kept], int(options.get("rare_to_train") or 0))
 
     labels = {k: sorted({getattr(c, k) for c, _, _ in kept}) for k in ("dataset", "content", "style")}
     out.mkdir(parents=True, exist_ok=True)
     per_split = {s: [(c, r) for (c, _, r), sp in zip(kept, split_of, strict=True) if sp == s] for s in SPLITS}
-    arrays = {s: _split_arrays(per_split[s], labels, seed) for s in SPLITS}
+    variants = int(options.get("caption_variants") or 0)
+    held_out = load_held_out(options.get("held_out") or [])
+    arrays = {s: _split_arrays(per_split[s], labels, seed, variants, held_out) for s in SPLITS}
     mean, std = mean_std(arrays["train"]["features"])
     for s in SPLITS:
         save_split(out / f"{s}.npz", arrays[s], compact=compact)
@@ -231,7 +243,36 @@ def _same_skeleton(kept, skipped):
     return same, skipped
 
 
-def _split_arrays(items: list[tuple[bandai.BandaiClip, ProcessedClip]], labels: dict, seed: int) -> dict:
+def caption_seed(seed: int, name: str, variants: int) -> int:
+    """The caption generator's seed for one clip. Without variants: the first 8 bytes of "seed:name", the seed the
+    embedded dataset was prepared with (it is the same for every clip; kept so `make data` rebuilds that data as
+    committed); with variants: a hash of the whole string, so clips of one action and style get different words."""
+    key = f"{seed}:{name}".encode()
+    if not variants:
+        return int.from_bytes(key[:8].ljust(8, b"\0"), "little")
+    return int.from_bytes(hashlib.sha256(key).digest()[:8], "little")
+
+
+def load_held_out(paths: list[str | Path]) -> frozenset[str]:
+    """Normalised texts of held-out description files, which generated captions must not repeat."""
+    texts = set()
+    for path in paths:
+        try:
+            items = json.loads(Path(path).read_text())["descriptions"]
+            texts |= {normalise_caption(d["text"]) for d in items}
+        except (OSError, ValueError, KeyError, TypeError) as err:
+            raise PrepareError(f"--held-out {path}: not a descriptions file ({err!r}); it needs "
+                               '{"descriptions": [{"text": ...}, ...]}') from None  # fmt: skip
+    return frozenset(texts)
+
+
+def _split_arrays(
+    items: list[tuple[bandai.BandaiClip, ProcessedClip]],
+    labels: dict,
+    seed: int,
+    variants: int = 0,
+    held_out: frozenset[str] = frozenset(),
+) -> dict:
     if not items:
         raise PrepareError("a split came out empty: too few clips were selected (raise --per-group)")
     lengths = np.array([len(r.joints) for _, r in items])
@@ -242,8 +283,8 @@ def _split_arrays(items: list[tuple[bandai.BandaiClip, ProcessedClip]], labels: 
         if given:
             captions.append(list(given))
             continue
-        rng = np.random.default_rng(int.from_bytes(f"{seed}:{c.name}".encode()[:8].ljust(8, b"\0"), "little"))
-        captions.append(generate_captions(c.content, c.style, r.facts, rng))
+        rng = np.random.default_rng(caption_seed(seed, c.name, variants))
+        captions.append(generate_captions(c.content, c.style, r.facts, rng, variants, held_out))
     native = items[0][1].native
     arrays = {
         "ids": np.array([c.name for c, _ in items]),
@@ -304,6 +345,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="dataset", required=True)
     b = sub.add_parser("bandai", help="Bandai Namco Research Motion Dataset 1/2 (zips or unzipped folders)")
     b.add_argument("--src", action="append", required=True, help="a release zip or folder (repeat for several)")
+    b.add_argument("--caption-variants", type=int, default=12,
+                   help="generated captions in varied wording per clip, beside the 3 label/measured ones (default 12)")
+    b.add_argument("--rare-to-train", type=int, default=3,
+                   help="all clips of an action with fewer clips than this go to train (default 3; 0: none)")
+    b.add_argument("--held-out", action="append", default=[],
+                   help="a JSON file of held-out descriptions no generated caption may repeat (repeatable)")
     add_common_arguments(b)
     v = sub.add_parser("bvh", help="any folder or zip of BVH files, with an optional labels CSV (100STYLE, ...)")
     v.add_argument("--src", action="append", required=True, help="a folder or zip of .bvh files (repeat for several)")
@@ -334,7 +381,8 @@ def main(argv: list[str] | None = None) -> int:
 
             report = prepare_bvh(args.src, args.out, args.labels, args.joint_map, args.units_to_metres, **common)
         else:
-            report = prepare_bandai(args.src, args.out, **common)
+            report = prepare_bandai(args.src, args.out, caption_variants=args.caption_variants,
+                                    rare_to_train=args.rare_to_train, held_out=args.held_out, **common)  # fmt: skip
     except (PrepareError, SourceError, bandai.BandaiLayoutError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

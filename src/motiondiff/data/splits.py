@@ -26,6 +26,15 @@ def stratified_split(names: Sequence[str], groups: Sequence[Hashable], seed: int
     return result
 
 
+def rare_to_train(split: list[str], labels: Sequence[Hashable], min_clips: int) -> list[str]:
+    """Clips of a label with fewer than `min_clips` clips in all go to train: one held-out clip measures nothing
+    reliably, while it may be the only example of that action a model could learn from (Bandai-1's one kick)."""
+    counts: dict[Hashable, int] = defaultdict(int)
+    for label in labels:
+        counts[label] += 1
+    return ["train" if counts[label] < min_clips else s for s, label in zip(split, labels, strict=True)]
+
+
 def stratified_subset(names: Sequence[str], groups: Sequence[Hashable], per_group: int, seed: int = 0) -> list[int]:
     """Indices of up to `per_group` clips of every group (seeded choice), in the input order."""
     by_group: dict[Hashable, list[int]] = defaultdict(list)

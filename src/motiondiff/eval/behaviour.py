@@ -1,27 +1,47 @@
-"""Does the model do what the prompt says? Measured facts of generated motion next to real clips.
+"""Does the model do what the prompt says? The action classifier's verdict and measured facts of generated motion,
+next to real clips of the asked action.
 
-    python -m motiondiff.eval.behaviour [checkpoint=latest] [num_samples=10] [seed=0]
+    python -m motiondiff.eval.behaviour [checkpoint=latest] [num_samples=10] [seed=0] [sampler=ddim steps=50]
+        [out=<folder>]
 
-For each prompt: distance travelled, wrists above the head, mean joint speed over N samples, and the same facts
-for the real test/val clips of the matching label, so a sanity check of a trained model is one command.
+For each prompt: how many samples the dataset's action classifier assigns the asked action (and what the rest
+become), distance travelled, wrists above the head and mean joint speed, with the same facts for the real clips of
+that label; a per-action table (behaviour.md) and a confusion matrix (behaviour_confusion.png) go to `out`. It
+samples with sample.py's default sampler (conf/sample.yaml), so the report shows what users get.
 """
 
 from __future__ import annotations
 
 import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
+from omegaconf import OmegaConf
 
 from motiondiff.data.captions import measure
 from motiondiff.data.features import joints_from_features
 
-# prompt, seconds, dataset label of the real clips it should resemble, what "success" means
+# prompt, seconds, dataset label of the real clips it should resemble
 DEFAULT_PROMPTS = (
     ("a person walks forward", 4.0, "walk"),
-    ("a person raises both hands", 2.5, "raise-up-both-hands"),
+    ("a person runs", 4.0, "run"),
+    ("a person raises both hands", 3.0, "raise-up-both-hands"),
+    ("a person waves the right hand", 3.0, "wave-right-hand"),
+    ("a person kicks", 3.0, "kick"),
+    ("a person bows", 3.0, "bow"),
 )
+TRAVELLING = ("walk", "run")  # labels whose generated travel is compared with the real clips'
+CONF_DIR = Path(__file__).resolve().parents[3] / "conf"
+
+
+def default_sampler(conf_dir: Path = CONF_DIR) -> dict:
+    """sample.py's default sampler and steps, read from conf/sample.yaml and conf/sampler/<name>.yaml."""
+    defaults = OmegaConf.load(conf_dir / "sample.yaml").defaults
+    name = next(d["sampler"] for d in defaults if isinstance(d, dict) and "sampler" in d)
+    sampler = OmegaConf.load(conf_dir / "sampler" / f"{name}.yaml")
+    return {"sampler": str(sampler.name), "steps": sampler.get("steps")}
 
 
 @dataclass
@@ -59,11 +79,11 @@ def generate(
     n: int,
     seed: int,
     guidance: float | None = None,
-    sampler: str = "ddpm",
+    sampler: str = "ddim",
     steps: int | None = None,
-):
-    """n joint sequences (frames, 22, 3) for a prompt (None: unconditioned); MDM's sampler and the model's
-    default guidance unless given."""
+) -> list[np.ndarray]:
+    """n de-normalised feature sequences (frames, D) for a prompt (None: unconditioned), with the model's default
+    guidance unless given."""
     from motiondiff.cli.sample import make_condition
 
     frames = min(round(seconds * module.hparams.fps), module.hparams.max_frames)
@@ -73,7 +93,7 @@ def generate(
     feats = module.sample(
         cond, torch.full((n,), frames), guidance=guidance, sampler=sampler, steps=steps, generator=gen, progress=True
     )
-    return [joints_from_features(f) for f in module.denormalise(feats).cpu().numpy()]
+    return list(module.denormalise(feats).cpu().numpy())
 
 
 def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test")) -> list[np.ndarray]:
@@ -89,51 +109,112 @@ def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test"
     return clips
 
 
-def report(module, data_root, n: int = 10, seed: int = 0, **sampling) -> dict:
+def classify(evaluators, features: list[np.ndarray]) -> np.ndarray:
+    """The action classifier's label id for each clip of features."""
+    return evaluators.embed_motion(features)["action_logits"].argmax(-1)
+
+
+def report(module, data_root, n: int = 10, seed: int = 0, evaluators=None, prompts=DEFAULT_PROMPTS, **sampling) -> dict:
+    """{prompt: {"label", "generated": Behaviour, "real": Behaviour, "predicted": names or None}} + unconditioned."""
     fps = module.hparams.fps
+    names = evaluators.meta["action"]["action_names"] if evaluators is not None and evaluators.action else None
     rows = {}
-    for prompt, seconds, label in DEFAULT_PROMPTS:
+    for prompt, seconds, label in prompts:
         frames = round(seconds * fps)
-        gen = Behaviour.of(generate(module, prompt, seconds, n, seed, **sampling), fps)
-        real = Behaviour.of(real_clips(data_root, label, frames), fps)
-        rows[prompt] = {"generated": gen, "real": real}
-    uncond = generate(module, None, 4.0, n, seed, **sampling)
-    rows["(unconditioned)"] = {"generated": Behaviour.of(uncond, fps), "real": None}
+        feats = generate(module, prompt, seconds, n, seed, **sampling)
+        real = real_clips(data_root, label, frames)
+        rows[prompt] = {
+            "label": label,
+            "generated": Behaviour.of([joints_from_features(f) for f in feats], fps),
+            "real": Behaviour.of(real, fps) if real else None,
+            "predicted": [names[i] for i in classify(evaluators, feats)] if names else None,
+        }
+    if module.condition_kind == "text":
+        uncond = generate(module, None, 4.0, n, seed, **sampling)
+        rows["(unconditioned)"] = {"label": None, "generated": Behaviour.of([joints_from_features(f) for f in uncond],
+                                                                              fps), "real": None, "predicted": None}  # fmt: skip
     return rows
 
 
 def print_report(rows: dict) -> None:
-    """Counts per prompt; "walk ok" = travelled >= 1.5 m with no wrist above the head."""
-    print(f"{'prompt':<28}{'who':>10}{'n':>4}{'travel>=1.5m':>14}{'walk ok':>9}{'travel<=0.5m':>14}{'2 wrists up':>13}"
-          f"{'no wrist up':>13}{'speed m/s':>11}")  # fmt: skip
-    for prompt, pair in rows.items():
-        for who, b in pair.items():
+    """Counts per prompt; "walk ok" = travelled >= 1.5 m with no wrist above the head; "as asked" = samples the
+    action classifier assigns the prompt's label."""
+    print(f"{'prompt':<31}{'who':>10}{'n':>4}{'as asked':>9}{'travel m':>9}{'travel>=1.5m':>13}{'walk ok':>8}"
+          f"{'travel<=0.5m':>13}{'2 wrists up':>12}{'no wrist up':>12}{'speed m/s':>10}")  # fmt: skip
+    for prompt, row in rows.items():
+        for who in ("generated", "real"):
+            b = row.get(who)
             if b is None:
                 continue
             k = len(b.travel)
-            print(f"{prompt:<28}{who:>10}{k:>4}{int((b.travel >= 1.5).sum()):>14}{int(b.walk_success().sum()):>9}"
-                  f"{int(b.in_place().sum()):>14}"
-                  f"{int(b.both_wrists_up.sum()):>13}{int((~b.any_wrist_up).sum()):>13}{b.speed.mean():>11.2f}")  # fmt: skip
+            asked = "" if who == "real" or row["predicted"] is None else str(row["predicted"].count(row["label"]))
+            print(f"{prompt:<31}{who:>10}{k:>4}{asked:>9}{np.median(b.travel):>9.2f}{int((b.travel >= 1.5).sum()):>13}"
+                  f"{int(b.walk_success().sum()):>8}{int(b.in_place().sum()):>13}"
+                  f"{int(b.both_wrists_up.sum()):>12}{int((~b.any_wrist_up).sum()):>12}{b.speed.mean():>10.2f}")  # fmt: skip
+
+
+def markdown_report(rows: dict, header: list[str]) -> str:
+    """behaviour.md: per prompt, the classifier's verdicts and travel/speed next to the real clips'."""
+    lines = ["### Behaviour report", "", *[f"- {h}" for h in header], "",
+             "| prompt | asked action | classified as asked | classified as (others) | median travel m (real) "
+             "| mean joint speed m/s (real) |", "|---|---|---:|---|---:|---:|"]  # fmt: skip
+    for prompt, row in rows.items():
+        if row["label"] is None:
+            continue
+        gen, real, pred = row["generated"], row["real"], row["predicted"] or []
+        others = {p: pred.count(p) for p in dict.fromkeys(pred) if p != row["label"]}
+        other_text = ", ".join(f"{p} {c}" for p, c in sorted(others.items(), key=lambda x: -x[1]))
+        real_travel = f" ({np.median(real.travel):.2f})" if real is not None else " (no real clip)"
+        real_speed = f" ({real.speed.mean():.2f})" if real is not None else ""
+        lines.append(f"| {prompt} | {row['label']} | {pred.count(row['label'])} of {len(gen.travel)} | {other_text} | "
+                     f"{np.median(gen.travel):.2f}{real_travel} | {gen.speed.mean():.2f}{real_speed} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
 
 
 def main(argv: list[str]) -> None:
     import os
+    import time
 
     from motiondiff.cli.common import REPO_DIR, find_checkpoint
     from motiondiff.cli.sample import load_module
+    from motiondiff.eval import action_table
+    from motiondiff.eval.protocol import Evaluators
 
     args = dict(a.split("=", 1) for a in argv)
-    outputs = os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs")
+    outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
     ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
     module = load_module(ckpt)
-    print(
-        f"checkpoint: {ckpt}  sampler: {args.get('sampler', 'ddpm')}  guidance: {args.get('guidance', module.default_guidance)}"
-    )
-    data_root = args.get("data", str(REPO_DIR / "data" / "bandai_mini"))
-    sampling = {"sampler": args.get("sampler", "ddpm"), "steps": int(args["steps"]) if "steps" in args else None}
+    dataset = module.hparams.get("dataset") or "bandai_mini"
+    data_root = args.get("data", str(REPO_DIR / "data" / dataset))
+    evaluator_dir = Path(args.get("evaluators", REPO_DIR / "checkpoints" / "evaluators" / dataset))
+    evaluators = Evaluators.load(evaluator_dir, module.hparams.num_joints).for_module(module) if any(
+        evaluator_dir.glob("action.safetensors")) else None  # fmt: skip
+    sampling = default_sampler()
+    if "sampler" in args:
+        sampling = {"sampler": args["sampler"], "steps": None}
+    if "steps" in args:
+        sampling["steps"] = int(args["steps"])
     if "guidance" in args:
         sampling["guidance"] = float(args["guidance"])
-    print_report(report(module, data_root, int(args.get("num_samples", 10)), int(args.get("seed", 0)), **sampling))
+    guidance = sampling.get("guidance", module.default_guidance)
+    header = [f"checkpoint: {ckpt}", f"sampler: {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
+              f"guidance {guidance:g}, seed {args.get('seed', 0)}",
+              f"classifier: {evaluator_dir if evaluators else 'none (no action.safetensors): no verdicts'}"]  # fmt: skip
+    print("\n".join(header))
+    rows = report(module, data_root, int(args.get("num_samples", 10)), int(args.get("seed", 0)), evaluators,
+                  **sampling)  # fmt: skip
+    print_report(rows)
+    out = Path(args.get("out", outputs / "behaviour" / time.strftime("%Y-%m-%d_%H-%M-%S")))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "behaviour.md").write_text(markdown_report(rows, header))
+    if evaluators is not None:
+        names = evaluators.meta["action"]["action_names"]
+        asked = [names.index(r["label"]) for r in rows.values() if r["predicted"] and r["label"] in names
+                 for _ in r["predicted"]]  # fmt: skip
+        got = [names.index(p) for r in rows.values() if r["predicted"] and r["label"] in names for p in r["predicted"]]
+        action_table.plot_confusion(action_table.confusion(asked, got, len(names)), names,
+                                    out / "behaviour_confusion.png", "behaviour prompts: asked vs classified")  # fmt: skip
+    print(f"written to {out}")
 
 
 if __name__ == "__main__":

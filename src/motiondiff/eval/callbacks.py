@@ -4,7 +4,10 @@
 subset of the validation split (fast DDIM sampling, fixed seed, so evaluations differ only by the weights), embeds
 them with the dataset's evaluators and logs `val/fid`, `val/r_precision_top{1,2,3}`, `val/mm_dist`,
 `val/diversity` (text), `val/accuracy` (action) or `val/kid`, `val/precision`, `val/recall` (unconditioned).
-A `ModelCheckpoint(monitor="val/fid", mode="min", save_top_k=1)` placed after it keeps the best-FID checkpoint.
+Text models on labelled data also sample once from each clip's label caption and log `val/action_accuracy` (does
+the motion do the action its caption names, by the dataset's action classifier).
+A `ModelCheckpoint(monitor="val/fid", mode="min", save_top_k=1)` placed after it keeps the best-FID checkpoint
+(`callbacks.best_fid.monitor=val/action_accuracy callbacks.best_fid.mode=max` keeps the best action accuracy).
 
 Place it before `EMAWeightAveraging` in the callback list: that callback swaps the averaged weights back out in
 its own `on_validation_epoch_end`, and the evaluation should see the averaged weights the model is sampled with.
@@ -20,7 +23,7 @@ import lightning as L
 import numpy as np
 import torch
 
-from motiondiff.eval.protocol import EvalClips, Evaluators, generate, replication_metrics
+from motiondiff.eval.protocol import EvalClips, Evaluators, action_accuracy, generate, replication_metrics
 
 log = logging.getLogger(__name__)
 
@@ -38,12 +41,14 @@ class GenerationEvaluation(L.Callback):
         batch_size: int = 64,
         seed: int = 0,
         precision: str = "32-true",
+        action_accuracy: bool = True,
     ):
         self.evaluator_dir = Path(evaluator_dir)
         self.every_n_epochs = every_n_epochs
         self.num_clips, self.split = num_clips, split
         self.sampling = {"sampler": sampler, "steps": steps, "precision": precision}
         self.guidance, self.batch_size, self.seed = guidance, batch_size, seed
+        self.action_accuracy = action_accuracy
         self.evaluators: Evaluators | None = None
         self._real: tuple[EvalClips, dict, list] | None = None
 
@@ -78,12 +83,18 @@ class GenerationEvaluation(L.Callback):
         was_training = pl_module.training
         feats = generate(pl_module, conditions, clips.lengths, self.batch_size, generator,
                          guidance=guidance, **self.sampling)  # fmt: skip
-        pl_module.train(was_training)
         gen = self.evaluators.embed_motion(feats)
         feats = self.evaluators.as_hml(feats)  # smoothness in the evaluators' feature space, as every metric
         text = self.evaluators.embed_text(captions) if kind == "text" else None
         values = replication_metrics(kind, self.evaluators, real, gen, text=text, actions=clips.actions,
                                      generated_features=feats, seed=self.seed)  # fmt: skip
+        if self.action_accuracy and kind == "text" and self.evaluators.action is not None and clips.labelled:
+            generator.manual_seed(self.seed)
+            labelled = generate(pl_module, clips.label_captions(), clips.lengths, self.batch_size, generator,
+                                guidance=guidance, **self.sampling)  # fmt: skip
+            values["action_accuracy"] = action_accuracy(self.evaluators, self.evaluators.embed_motion(labelled),
+                                                        clips.actions)  # fmt: skip
+        pl_module.train(was_training)
         for name, value in values.items():
             pl_module.log(f"val/{name}", float(value), prog_bar=name == "fid", sync_dist=True)
         log.info("evaluation at step %d (%.1f s): %s", trainer.global_step, time.perf_counter() - start,

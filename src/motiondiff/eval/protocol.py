@@ -5,6 +5,8 @@ captions or action labels; both go through the same evaluators (`Evaluators`), a
 from `replication_metrics`. Which metrics depend on the condition:
 
 - text: R-precision top-1/2/3, FID, MM-Dist, Diversity (+ MultiModality) on the text-motion evaluator's features;
+  where the dataset has action labels and an action classifier, also the action accuracy of motion generated from
+  captions: does the motion perform the action its caption names (`action_accuracy`)?
 - action: FID, accuracy, Diversity (+ MultiModality) on the action classifier's features;
 - none (unconstrained, MoDi/vvMDM protocol): FID, KID, precision, recall, Diversity on the action classifier's
   features when there is one (else the text-motion evaluator's), and smoothness of the generated features.
@@ -66,6 +68,15 @@ class EvalClips:
     def pick_captions(self, rng: np.random.Generator) -> list[str]:
         """One caption per clip, drawn at random (the official loader draws one per motion each time)."""
         return [c[int(rng.integers(len(c)))] if c else "" for c in self.captions]
+
+    def label_captions(self) -> list[str]:
+        """Each clip's first caption: for generated captions the one built from the labels alone, which names the
+        action (motiondiff.data.captions), so the action-accuracy metric asks for exactly the labelled action."""
+        return [c[0] if c else "" for c in self.captions]
+
+    @property
+    def labelled(self) -> bool:
+        return bool((self.actions >= 0).any())
 
 
 def pad(features: list[np.ndarray]) -> tuple[torch.Tensor, torch.Tensor]:
@@ -183,6 +194,18 @@ def replication_metrics(
     if generated_features is not None:
         out["smoothness"] = float(np.mean([M.smoothness(f, smoothness_alpha) for f in generated_features]))
     return out
+
+
+def action_accuracy(evaluators: Evaluators, generated: dict[str, np.ndarray], actions: np.ndarray) -> float:
+    """Share of motions the dataset's action classifier assigns the label of the clip they were generated for
+    (clips without a label are left out)."""
+    if "action_logits" not in generated:
+        raise ValueError("action accuracy needs the dataset's action classifier; its evaluators have none")
+    actions = np.asarray(actions)
+    keep = actions >= 0
+    if not keep.any():
+        raise ValueError("action accuracy needs action labels; none of these clips has one")
+    return float((generated["action_logits"].argmax(-1)[keep] == actions[keep]).mean())
 
 
 def multimodality(embeddings: np.ndarray, num_pairs: int = 10, seed: int = 0) -> float:

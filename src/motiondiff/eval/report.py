@@ -35,6 +35,8 @@ LAYOUTS: dict[str, list[tuple[str, str, str]]] = {
         ("mm_dist", "MM Dist", "↓"),
         ("diversity", "Diversity", "→"),
         ("multimodality", "MultiModality", "↑"),
+        ("action_accuracy", "Action acc. (label caption)", "↑"),  # labelled datasets with an action classifier
+        ("action_accuracy_random", "Action acc. (random caption)", "↑"),
     ],
     "action": [  # MDM Table 3 (action-to-motion)
         ("fid", "FID", "↓"),

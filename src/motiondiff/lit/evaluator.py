@@ -20,7 +20,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from motiondiff.data.features import skeleton_for_dim
+from motiondiff.data.features import evaluator_std, skeleton_for_dim
 from motiondiff.eval.evaluators import ActionClassifierGRU, TextMotionEvaluator, motion_input
 from motiondiff.eval.metrics import r_precision
 
@@ -78,7 +78,7 @@ class MovementAutoencoderModule(_BestWeights):
         super().__init__()
         self.save_hyperparameters(ignore=["evaluator", "mean", "std"])
         self.evaluator = evaluator
-        evaluator.set_normalisation(mean, std)
+        evaluator.set_normalisation(mean, evaluator_std(std))  # the T2M evaluator convention (feat_bias 5)
         enc = evaluator.movement_encoder
         self.decoder = MovementDecoder(enc.out_net.out_features, enc.main[0].out_channels, enc.main[0].in_channels)
         self.register_buffer("data_mean", torch.as_tensor(mean, dtype=torch.float32))
@@ -136,7 +136,7 @@ class TextMotionEvaluatorModule(_BestWeights):
         super().__init__()
         self.save_hyperparameters(ignore=["evaluator", "mean", "std"])
         self.evaluator = evaluator
-        evaluator.set_normalisation(mean, std)
+        evaluator.set_normalisation(mean, evaluator_std(std))  # the T2M evaluator convention (feat_bias 5)
         out = evaluator.motion_encoder.output_net[-1].out_features
         self.summary_head = nn.Linear(out, 2 * len(range(*SUMMARY_DIMS.indices(mean.shape[0]))))
         if freeze_movement:

@@ -77,5 +77,5 @@ class HMLRepresentation(Representation):
         return (features[..., self._slices["contacts"]] > 0.5).to(features.dtype)
 
     def mean_std(self, features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """HumanML3D's own statistics (block-averaged std, root and contacts weighted x5)."""
+        """HumanML3D's own statistics (Mean.npy/Std.npy: block-averaged std)."""
         return mean_std(np.asarray(features).reshape(-1, self.dim), self.skeleton.num_joints)
