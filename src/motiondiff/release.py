@@ -64,3 +64,34 @@ def _plain(value):
     if isinstance(value, Path):
         return str(value)
     raise TypeError(f"hyper-parameter value {value!r} of type {type(value).__name__} cannot be stored as JSON")
+
+
+def cpu_description() -> str:
+    """'<cores>-core <model name> (<fast instruction set>)' of this machine, for a model card."""
+    import os
+    import platform
+
+    from motiondiff.hardware import cpu_has_fast_bf16
+
+    name = platform.processor() or "CPU"
+    try:
+        with open("/proc/cpuinfo") as f:
+            name = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    isa = "native bf16" if cpu_has_fast_bf16() else torch.backends.cpu.get_cpu_capability() + ", no native bf16"
+    return f"{os.cpu_count()}-core {name} ({isa})"
+
+
+def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple[Path, Path]:
+    """Release a training checkpoint (its EMA weights when it trained with EMA) with the training step, the run's
+    command line and `provenance` (data, training time, machine, metrics) in the JSON."""
+    from motiondiff.lit.diffusion import MotionDiffusionModule
+
+    state = torch.load(ckpt, map_location="cpu", weights_only=True)
+    module = MotionDiffusionModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
+    run = Path(ckpt).resolve().parents[1] / "run.json"
+    argv = json.loads(run.read_text())["provenance"].get("argv", []) if run.is_file() else []
+    info = {"checkpoint": Path(ckpt).name, "train_steps": int(state["global_step"]),
+            "command": "python " + " ".join(argv) if argv else None, **provenance}  # fmt: skip
+    return save_release(module, out, info)

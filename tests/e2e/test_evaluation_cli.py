@@ -27,7 +27,7 @@ def test_best_fid_checkpoint_is_the_lowest_logged_fid(tmp_path):
     rows = list(csv.DictReader(open(next(run.glob("csv/version_*/metrics.csv")))))
     fids = {int(r["step"]): float(r["val/fid"]) for r in rows if r.get("val/fid")}
     assert len(fids) >= 4, f"expected an FID per evaluation, got {fids}"
-    for key in ("val/r_precision_top3", "val/mm_dist", "val/diversity"):
+    for key in ("val/r_precision_top3", "val/mm_dist", "val/diversity", "val/action_accuracy"):
         assert any(r.get(key) for r in rows), f"{key} was not logged"
     kept = list(run.glob("checkpoints/best-fid-*.ckpt"))
     assert len(kept) == 1, kept
@@ -51,6 +51,11 @@ def test_evaluate_writes_paper_table_and_sweep_plot(text_ckpt, tmp_path):
     assert metrics["summary"]["fid"][2] == 2 and metrics["summary"]["multimodality"][2] == 1
     assert metrics["real"]["r_precision_top3"][0] > 0.3  # real clips match their captions far above chance (0.1)
     assert {r["method"] for r in csv.DictReader(open(run / "table.csv"))} >= {"Real"}
+    # does the motion do the action its caption names: label captions, random captions, the real clips' accuracy
+    assert metrics["summary"]["action_accuracy"][2] == 2 and "action_accuracy_random" in metrics["summary"]
+    assert metrics["real"]["action_accuracy"][0] > 0.5 and "Action acc. (label caption)" in table
+    assert "ratio" in table and "| raise-up-both-hands |" in (run / "action_accuracy.md").read_text()
+    assert (run / "action_confusion.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "Real" in proc.stdout
 
     run_cli("evaluate.py", "-m", "guidance=0,2.5", *common[:1], "replications=2", "mm_replications=0", "steps=3",

@@ -48,6 +48,11 @@ def test_subset_report(subset):
     assert json.loads((out / "report.json").read_text())["clips"] == report["clips"]
     assert "CC BY-NC 4.0" in (out / "README.md").read_text() and (out / "LICENSE").is_file()
     assert "generated" in json.loads((out / "meta.json").read_text())["captions"]
+    # an action with fewer than 3 clips is train-only: its one clip is the only example a model could learn from
+    per_content = report["per_content"]  # {split: {content: clips}}
+    total = {c: sum(per_content[s].get(c, 0) for s in per_content) for c in per_content["train"]}
+    rare = {c for c, n in total.items() if n < 3}
+    assert rare and not rare & (set(per_content["val"]) | set(per_content["test"]))
 
 
 def test_subset_arrays(subset):
@@ -75,7 +80,8 @@ def test_subset_arrays(subset):
         if np.linalg.norm(travel_22) > 0.5:
             cos = travel_native @ travel_22 / np.linalg.norm(travel_native) / np.linalg.norm(travel_22)
             assert cos > 0.98
-        assert len(data.captions(i)) >= 2
+        assert len(data.captions(i)) >= 2 + 12  # label, measured, and 12 in varied wording (caption_variants)
+        assert len(set(data.captions(i))) == len(data.captions(i))
     assert data.mean.shape == data.std.shape == (263,) and (data.std > 0).all()
 
 

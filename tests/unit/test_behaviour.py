@@ -27,3 +27,16 @@ def test_real_reference_clips_from_the_embedded_data():
     assert len(walks) >= 20 and len(raises) >= 10
     assert Behaviour.of(walks, 20).walk_success().mean() > 0.9
     assert Behaviour.of(raises, 20).in_place().all()
+
+
+def test_report_samples_as_sample_py_does():
+    """The behaviour report's sampler is sample.py's default (conf/sample.yaml), not a sampler of its own."""
+    from hydra import compose, initialize_config_dir
+
+    from motiondiff.eval.behaviour import CONF_DIR, DEFAULT_PROMPTS, default_sampler
+
+    with initialize_config_dir(str(CONF_DIR), version_base=None):
+        cfg = compose("sample")  # what sample.py runs with when given nothing
+    assert default_sampler() == {"sampler": cfg.sampler.name, "steps": cfg.sampler.steps}
+    asked = {label for _, _, label in DEFAULT_PROMPTS}
+    assert {"walk", "run", "raise-up-both-hands", "wave-right-hand", "kick", "bow"} <= asked

@@ -184,7 +184,10 @@ def run(cfg: DictConfig) -> Path:
     module = load_module(ckpt, cfg.device)
     _check(cfg, module)  # before any work: bad settings fail at once
     rep = (module.hparams.get("representation") or {}).get("name")
-    dm = instantiate(cfg.dataset.datamodule, **({"representation": rep} if rep else {}))
+    overrides = {"representation": rep} if rep else {}
+    if module.hparams.get("max_frames"):  # clips cropped as the model trained (it never made longer motion)
+        overrides["max_frames"] = int(module.hparams.max_frames)
+    dm = instantiate(cfg.dataset.datamodule, **overrides)
     report_evaluation(cfg, module, dm, out, str(ckpt))
     return out
 

@@ -108,12 +108,12 @@ def test_checks(
             out[f"r_precision_{k}"] = float(np.mean([t[k] for t in tops]))
         stats = {name: M.gaussian_statistics(e[TEXT_MOTION])
                  for name, e in (("test", real_test), ("train", real_train), ("reversed", reversed_test))}  # fmt: skip
-        out["fid_test_vs_train"] = M.frechet_distance(*stats["test"], *stats["train"])
-        out["fid_test_vs_reversed"] = M.frechet_distance(*stats["test"], *stats["reversed"])
+        out[f"fid_{split}_vs_train"] = M.frechet_distance(*stats["test"], *stats["train"])
+        out[f"fid_{split}_vs_reversed"] = M.frechet_distance(*stats["test"], *stats["reversed"])
     if evaluators.action is not None:
         out["accuracy"] = float((real_test["action_logits"].argmax(-1) == test.actions).mean())
         stats = [M.gaussian_statistics(e["action_features"]) for e in (real_test, real_train)]
-        out["action_fid_test_vs_train"] = M.frechet_distance(*stats[0], *stats[1])
+        out[f"action_fid_{split}_vs_train"] = M.frechet_distance(*stats[0], *stats[1])
     return out
 
 
@@ -166,6 +166,7 @@ def run(cfg: DictConfig) -> Path:
         }
         save_released(model, out / kind, meta)
     print(f"\nevaluators written to {out}")
-    for k, v in {**val_checks, **checks}.items():
-        print(f"  {k:>26}: {v:.4g}" if isinstance(v, float) else f"  {k:>26}: {v}")
+    for split, values in (("val", val_checks), ("test", checks)):
+        for k, v in values.items():
+            print(f"  {split:>4} {k:>26}: {v:.4g}" if isinstance(v, float) else f"  {split:>4} {k:>26}: {v}")
     return out

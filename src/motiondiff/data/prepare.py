@@ -345,12 +345,24 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="dataset", required=True)
     b = sub.add_parser("bandai", help="Bandai Namco Research Motion Dataset 1/2 (zips or unzipped folders)")
     b.add_argument("--src", action="append", required=True, help="a release zip or folder (repeat for several)")
-    b.add_argument("--caption-variants", type=int, default=12,
-                   help="generated captions in varied wording per clip, beside the 3 label/measured ones (default 12)")
-    b.add_argument("--rare-to-train", type=int, default=3,
-                   help="all clips of an action with fewer clips than this go to train (default 3; 0: none)")
-    b.add_argument("--held-out", action="append", default=[],
-                   help="a JSON file of held-out descriptions no generated caption may repeat (repeatable)")
+    b.add_argument(
+        "--caption-variants",
+        type=int,
+        default=12,
+        help="generated captions in varied wording per clip, beside the 3 label/measured ones (default 12)",
+    )
+    b.add_argument(
+        "--rare-to-train",
+        type=int,
+        default=3,
+        help="all clips of an action with fewer clips than this go to train (default 3; 0: none)",
+    )
+    b.add_argument(
+        "--held-out",
+        action="append",
+        default=[],
+        help="a JSON file of held-out descriptions no generated caption may repeat (repeatable)",
+    )
     add_common_arguments(b)
     v = sub.add_parser("bvh", help="any folder or zip of BVH files, with an optional labels CSV (100STYLE, ...)")
     v.add_argument("--src", action="append", required=True, help="a folder or zip of .bvh files (repeat for several)")

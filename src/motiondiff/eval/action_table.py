@@ -47,9 +47,15 @@ def per_action_rows(
 
 
 def format_per_action(rows: list[dict], title: str, notes: Sequence[str] = ()) -> str:
-    lines = [f"### {title}", "", "| action | clips | generated | real | most often mistaken for |", "|---|---:|---:|---:|---|"]
+    lines = [
+        f"### {title}",
+        "",
+        "| action | clips | generated | real | most often mistaken for |",
+        "|---|---:|---:|---:|---|",
+    ]
     for r in rows:
-        lines.append(f"| {r['action']} | {r['clips']} | {r['generated']:.2f} | {r['real']:.2f} | {r['mistaken_for']} |")
+        real = "–" if np.isnan(r["real"]) else f"{r['real']:.2f}"
+        lines.append(f"| {r['action']} | {r['clips']} | {r['generated']:.2f} | {real} | {r['mistaken_for']} |")
     lines += [""] + [f"- {n}" for n in notes]
     return "\n".join(lines) + "\n"
 

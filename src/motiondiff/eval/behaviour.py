@@ -38,7 +38,7 @@ CONF_DIR = Path(__file__).resolve().parents[3] / "conf"
 
 def default_sampler(conf_dir: Path = CONF_DIR) -> dict:
     """sample.py's default sampler and steps, read from conf/sample.yaml and conf/sampler/<name>.yaml."""
-    defaults = OmegaConf.load(conf_dir / "sample.yaml").defaults
+    defaults = OmegaConf.to_container(OmegaConf.load(conf_dir / "sample.yaml").defaults)
     name = next(d["sampler"] for d in defaults if isinstance(d, dict) and "sampler" in d)
     sampler = OmegaConf.load(conf_dir / "sampler" / f"{name}.yaml")
     return {"sampler": str(sampler.name), "steps": sampler.get("steps")}
@@ -107,6 +107,16 @@ def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test"
             if data.label("content", i) == label:
                 clips.append(data.arrays["joints"][data.clip_slice(i)][:max_frames])
     return clips
+
+
+def sampling_args(args: dict[str, str]) -> dict:
+    """sampler=, steps=, guidance= of a key=value command line over sample.py's default sampler."""
+    sampling = default_sampler() if "sampler" not in args else {"sampler": args["sampler"], "steps": None}
+    if "steps" in args:
+        sampling["steps"] = int(args["steps"])
+    if "guidance" in args:
+        sampling["guidance"] = float(args["guidance"])
+    return sampling
 
 
 def classify(evaluators, features: list[np.ndarray]) -> np.ndarray:
@@ -189,13 +199,7 @@ def main(argv: list[str]) -> None:
     evaluator_dir = Path(args.get("evaluators", REPO_DIR / "checkpoints" / "evaluators" / dataset))
     evaluators = Evaluators.load(evaluator_dir, module.hparams.num_joints).for_module(module) if any(
         evaluator_dir.glob("action.safetensors")) else None  # fmt: skip
-    sampling = default_sampler()
-    if "sampler" in args:
-        sampling = {"sampler": args["sampler"], "steps": None}
-    if "steps" in args:
-        sampling["steps"] = int(args["steps"])
-    if "guidance" in args:
-        sampling["guidance"] = float(args["guidance"])
+    sampling = sampling_args(args)
     guidance = sampling.get("guidance", module.default_guidance)
     header = [f"checkpoint: {ckpt}", f"sampler: {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
               f"guidance {guidance:g}, seed {args.get('seed', 0)}",

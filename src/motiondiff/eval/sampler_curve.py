@@ -1,6 +1,7 @@
-"""Fewer sampling steps at matched quality (issue 8): FID, R-precision, MM-Dist and Diversity of one model per
-sampler and step count, next to the seconds one motion takes, and the cheapest sampler whose FID is within
-``tolerance`` of DDIM-50's.
+"""Fewer sampling steps at matched quality (issue 8): FID, R-precision, MM-Dist, Diversity and (on labelled data)
+action accuracy of one model per sampler and step count, next to the seconds one motion takes, and the cheapest
+sampler whose FID is within ``tolerance`` of DDIM-50's and whose action accuracy (label captions) is within
+``accuracy_margin`` of the best sampler's: a sampler must not trade "does it do the action" for FID.
 
     python evaluate.py -m checkpoint=shipped sampler=ddim steps=10,20,50 replications=10 mm_replications=0
     python evaluate.py checkpoint=shipped sampler=ddpm replications=3 mm_replications=0
@@ -19,7 +20,7 @@ from pathlib import Path
 
 from motiondiff.cli.common import REPO_DIR, UsageError, key_value_args
 
-KEYS = ("runs", "bench", "tolerance", "out")
+KEYS = ("runs", "bench", "tolerance", "accuracy_margin", "out")
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "sampler_curve"
 METRICS = ("fid", "r_precision_top3", "mm_dist", "diversity")
 
@@ -34,19 +35,32 @@ def load_run(folder: Path) -> dict:
     return {"sampler": name, "steps": int(steps), "label": f"{name.upper()}-{int(steps)}",
             "replications": len(data["replications"]["Model"]), "guidance": data["guidance"],
             "checkpoint": Path(data["checkpoint"]).name,
-            **{m: data["summary"][m] for m in METRICS}}  # fmt: skip
+            **{m: data["summary"][m] for m in METRICS},
+            "action_accuracy": data["summary"].get("action_accuracy")}  # fmt: skip
 
 
-def choose(rows: list[dict], tolerance: float) -> dict:
-    """The row with the fewest steps whose FID is within ``tolerance`` (relative) of DDIM-50's."""
+def choose(rows: list[dict], tolerance: float, accuracy_margin: float = 0.02) -> dict:
+    """The row with the fewest steps whose FID is within ``tolerance`` (relative) of DDIM-50's and, where every run
+    measured it, whose action accuracy is within ``accuracy_margin`` (absolute) of the best run's (none: the most
+    accurate of those within the FID tolerance)."""
     reference = next((r for r in rows if r["label"] == "DDIM-50"), None)
     if reference is None:
         raise UsageError("the runs need a DDIM-50 evaluation to compare against")
     limit = reference["fid"][0] * (1 + tolerance)
-    return min((r for r in rows if r["fid"][0] <= limit), key=lambda r: (r["steps"], r["fid"][0]))
+    ok = [r for r in rows if r["fid"][0] <= limit]
+    if all(r.get("action_accuracy") for r in rows):
+        best = max(r["action_accuracy"][0] for r in rows)
+        ok = [r for r in ok if r["action_accuracy"][0] >= best - accuracy_margin] or [
+            max(ok, key=lambda r: r["action_accuracy"][0])]  # fmt: skip
+    return min(ok, key=lambda r: (r["steps"], r["fid"][0]))
 
 
-def write(out: Path, rows: list[dict], chosen: dict, tolerance: float, times: dict) -> None:
+def _accuracy(r: dict) -> str:
+    a = r.get("action_accuracy")
+    return "–" if not a else f"{a[0]:.3f} ± {a[1]:.3f}"
+
+
+def write(out: Path, rows: list[dict], chosen: dict, tolerance: float, times: dict, margin: float = 0.02) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -57,15 +71,18 @@ def write(out: Path, rows: list[dict], chosen: dict, tolerance: float, times: di
     lines = ["# Sampling steps against quality", "",
              f"Model `{rows[0].get('checkpoint', 'shipped')}`, guidance {rows[0]['guidance']:g}; mean ± 95% CI over "
              "each run's replications; seconds: one 196-frame motion with guidance (bench/results/latest.json).", "",
-             "| sampler | replications | FID | FID / DDIM-50 | R-precision top-3 | MM-Dist | Diversity | s per motion |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+             "| sampler | replications | FID | FID / DDIM-50 | R-precision top-3 | MM-Dist | Diversity | action acc. "
+             "| s per motion |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
     for r in rows:
         t = times.get(f"sample_1_{r['sampler']}{r['steps']}_guided_s")
         lines.append(f"| {r['label']}{' **(chosen)**' if r is chosen else ''} | {r['replications']} | "
                      f"{r['fid'][0]:.2f} ± {r['fid'][1]:.2f} | {r['fid'][0] / ref:.2f} | "
                      f"{r['r_precision_top3'][0]:.3f} ± {r['r_precision_top3'][1]:.3f} | {r['mm_dist'][0]:.2f} | "
-                     f"{r['diversity'][0]:.2f} | {'–' if t is None else f'{t:.2f}'} |")  # fmt: skip
-    lines += ["", f"Chosen: **{chosen['label']}**, the fewest steps with FID within {tolerance:.0%} of DDIM-50's.", ""]
+                     f"{r['diversity'][0]:.2f} | {_accuracy(r)} | {'–' if t is None else f'{t:.2f}'} |")  # fmt: skip
+    rule = f"the fewest steps with FID within {tolerance:.0%} of DDIM-50's"
+    if all(r.get("action_accuracy") for r in rows):
+        rule += f" and action accuracy within {margin:g} of the best sampler's"
+    lines += ["", f"Chosen: **{chosen['label']}**, {rule}.", ""]
     out.with_suffix(".md").write_text("\n".join(lines))
     out.with_suffix(".json").write_text(json.dumps({"rows": rows, "chosen": chosen["label"], "tolerance": tolerance,
                                                     "seconds": times}, indent=1))  # fmt: skip
@@ -94,9 +111,10 @@ def main(argv: list[str] | None = None) -> int:
     times = (
         {k: v for k, v in json.loads(bench.read_text()).items() if k.startswith("sample_1_")} if bench.is_file() else {}
     )
-    chosen = choose(rows, tolerance)
+    margin = float(args.get("accuracy_margin", 0.02))
+    chosen = choose(rows, tolerance, margin)
     out = Path(args.get("out", DEFAULT_OUT))
-    write(out, rows, chosen, tolerance, times)
+    write(out, rows, chosen, tolerance, times, margin)
     print(out.with_suffix(".md").read_text())
     return 0
 
