@@ -87,11 +87,14 @@ def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple
     """Release a training checkpoint (its EMA weights when it trained with EMA) with the training step, the run's
     command line and `provenance` (data, training time, machine, metrics) in the JSON."""
     from motiondiff.lit.diffusion import MotionDiffusionModule
+    from motiondiff.provenance import git_state
 
     state = torch.load(ckpt, map_location="cpu", weights_only=True)
     module = MotionDiffusionModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
     run = Path(ckpt).resolve().parents[1] / "run.json"
-    argv = json.loads(run.read_text())["provenance"].get("argv", []) if run.is_file() else []
+    trained = json.loads(run.read_text())["provenance"] if run.is_file() else {}
+    argv = trained.get("argv", [])
     info = {"checkpoint": Path(ckpt).name, "train_steps": int(state["global_step"]),
-            "command": "python " + " ".join(argv) if argv else None, **provenance}  # fmt: skip
+            "command": "python " + " ".join(argv) if argv else None, "trained_at_git": trained.get("git"),
+            "released_at_git": git_state(), **provenance}  # fmt: skip
     return save_release(module, out, info)

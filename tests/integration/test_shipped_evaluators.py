@@ -51,3 +51,32 @@ def test_time_reversal_is_reencoded_not_flipped(setup):
     b = clip[1 : 1 + len(twice), 4:67].reshape(len(twice), 21, 3)
     assert np.abs(a[..., 1] - b[..., 1]).max() < 1e-4
     assert np.abs(np.linalg.norm(a[..., [0, 2]], axis=-1) - np.linalg.norm(b[..., [0, 2]], axis=-1)).max() < 1e-3
+
+
+def test_full_bandai_evaluators_recognise_the_embedded_clips():
+    """The evaluators released for the full Bandai set (checkpoints/evaluators/bandai) read the embedded clips, which
+    are a subset of that set, as a released classifier should: the actions of the real clips, and their val/test
+    checks recorded beside the training provenance."""
+    folder = REPO_DIR / "checkpoints" / "evaluators" / "bandai"
+    if not (folder / "action.safetensors").is_file():
+        pytest.skip(f"no evaluators in {folder}: python -m motiondiff.eval.train_evaluator dataset=bandai")
+    evaluators = Evaluators.load(folder)
+    names = evaluators.meta["action"]["action_names"]
+    assert len(names) == 24 and "kick" in names
+    for kind in ("action", "text_motion"):
+        meta = evaluators.meta[kind]
+        assert (
+            meta["dataset"] == "bandai"
+            and meta["val_checks"]["val_clips"] > 200
+            and "dataset=bandai" in meta["command"]
+        )
+    dm = PreparedDataModule(embedded_data_root(), max_frames=120)
+    dm.setup(None)
+    clips = EvalClips.from_dataset(dm.dataset("test"))
+    asked = np.array([names.index(dm.action_names[a]) for a in clips.actions])
+    predicted = evaluators.embed_motion(clips.features)["action_logits"].argmax(-1)
+    # The embedded clips are 4-s crops of their most active frames, which the classifier (trained on whole clips)
+    # never saw, and mostly Bandai-1 actions with 1-15 clips, which it recognises poorly even whole
+    # (docs/results/bandai_text/README.md): 0.58 when released. A floor far above chance (1/24), not the headline.
+    assert (predicted == asked).mean() >= 0.5
+    assert meta["test_checks"]["test_clips"] > 200 and evaluators.meta["action"]["test_checks"]["accuracy"] >= 0.9
