@@ -5,6 +5,7 @@ instructions (AVX512-BF16, AMX), and ~10-20x SLOWER where it has not (measured o
 from __future__ import annotations
 
 import functools
+import platform
 
 import torch
 
@@ -21,3 +22,15 @@ def cpu_has_fast_bf16() -> bool:
 def fast_cpu_precision() -> str:
     """Lightning precision for CPU presets: 'bf16-mixed' where native, else '32-true'."""
     return "bf16-mixed" if cpu_has_fast_bf16() else "32-true"
+
+
+def cpu_model() -> str:
+    """The CPU's model name (/proc/cpuinfo), for benchmark records and model cards."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"

@@ -69,18 +69,11 @@ def _plain(value):
 def cpu_description() -> str:
     """'<cores>-core <model name> (<fast instruction set>)' of this machine, for a model card."""
     import os
-    import platform
 
-    from motiondiff.hardware import cpu_has_fast_bf16
+    from motiondiff.hardware import cpu_has_fast_bf16, cpu_model
 
-    name = platform.processor() or "CPU"
-    try:
-        with open("/proc/cpuinfo") as f:
-            name = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
     isa = "native bf16" if cpu_has_fast_bf16() else torch.backends.cpu.get_cpu_capability() + ", no native bf16"
-    return f"{os.cpu_count()}-core {name} ({isa})"
+    return f"{os.cpu_count()}-core {cpu_model()} ({isa})"
 
 
 def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple[Path, Path]:

@@ -61,7 +61,7 @@ def test_full_bandai_evaluators_recognise_the_embedded_clips():
     if not (folder / "action.safetensors").is_file():
         pytest.skip(f"no evaluators in {folder}: python -m motiondiff.eval.train_evaluator dataset=bandai")
     evaluators = Evaluators.load(folder)
-    names = evaluators.meta["action"]["action_names"]
+    names = evaluators.action_names
     assert len(names) == 24 and "kick" in names
     for kind in ("action", "text_motion"):
         meta = evaluators.meta[kind]

@@ -7,18 +7,7 @@ import platform
 
 import torch
 
-from motiondiff.hardware import cpu_has_fast_bf16
-
-
-def cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+from motiondiff.hardware import cpu_has_fast_bf16, cpu_model
 
 
 def allocator() -> str:

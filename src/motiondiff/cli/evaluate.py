@@ -56,11 +56,6 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None]:
     return guidance, steps
 
 
-def measures_action(kind: str, evaluators: Evaluators, clips: EvalClips) -> bool:
-    """Text models on labelled data with an action classifier: does the motion do the action its caption names?"""
-    return kind == "text" and evaluators.action is not None and clips.labelled
-
-
 def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict, dict, dict]:
     """(rows {"Real": summary, "Model": summary}, per-replication values, timings). Text models on labelled data
     also generate once per replication from each clip's label caption (`action_accuracy`, predictions kept in
@@ -76,7 +71,7 @@ def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict,
     reps: dict[str, list[dict]] = {"Real": [], "Model": []}
     timings = {"generation_s": 0.0, "motions": 0}
     mm_n = min(cfg.mm_conditions, len(test))
-    with_action = bool(cfg.action_accuracy) and measures_action(kind, evaluators, test)
+    with_action = bool(cfg.action_accuracy) and evaluators.measures_action(kind, test)
     total = cfg.replications * len(test) * (2 if with_action else 1)
     total += min(cfg.mm_replications, cfg.replications) * mm_n * cfg.mm_repeats
     if with_action:
@@ -140,7 +135,7 @@ def _multimodality(cfg, module, evaluators, test, captions, n, seed, bar, sampli
 def _write_action_tables(out: Path, predictions: dict, evaluators: Evaluators, rows: dict, split: str) -> list[str]:
     """action_accuracy.md (per action, generated from label captions vs real) and action_confusion.png; returns
     the table's notes on the headline ratio."""
-    names = evaluators.meta["action"]["action_names"]
+    names = evaluators.action_names
     gen, real = rows["Model"]["action_accuracy"][0], rows["Real"]["action_accuracy"][0]
     rand = rows["Model"]["action_accuracy_random"][0]
     notes = [

@@ -208,7 +208,7 @@ def generate_captions(
     captions.append(_sentence(subjects[2], travel, "", ", ".join(d for d in details if not d.startswith("moving"))))
     if variants:
         captions += [c for c in varied_captions(content, style, rng, variants + 3) if c not in captions][:variants]
-    return [c for c in captions[:1]] + [c for c in captions[1:] if normalise_caption(c) not in held_out]
+    return captions[:1] + [c for c in captions[1:] if normalise_caption(c) not in held_out]
 
 
 def _detail_phrases(facts: MotionFacts) -> list[str]:

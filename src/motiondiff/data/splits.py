@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import hashlib
-from collections import defaultdict
+from collections import Counter, defaultdict
 from collections.abc import Hashable, Sequence
 
 # Every 10 consecutive clips of the stratified order: 8 train, 1 val, 1 test.
@@ -29,9 +29,7 @@ def stratified_split(names: Sequence[str], groups: Sequence[Hashable], seed: int
 def rare_to_train(split: list[str], labels: Sequence[Hashable], min_clips: int) -> list[str]:
     """Clips of a label with fewer than `min_clips` clips in all go to train: one held-out clip measures nothing
     reliably, while it may be the only example of that action a model could learn from (Bandai-1's one kick)."""
-    counts: dict[Hashable, int] = defaultdict(int)
-    for label in labels:
-        counts[label] += 1
+    counts = Counter(labels)
     return ["train" if counts[label] < min_clips else s for s, label in zip(split, labels, strict=True)]
 
 

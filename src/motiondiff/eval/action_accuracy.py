@@ -52,7 +52,7 @@ def measure(module, evaluators, items: list[dict], lengths: dict[str, int], n: i
     """Classifier verdicts for n samples of every description: {"asked": [...], "predicted": [...], ...}."""
     from motiondiff.eval.protocol import generate
 
-    names = evaluators.meta["action"]["action_names"]
+    names = evaluators.action_names
     unknown = sorted({d["action"] for d in items} - set(names))
     if unknown:
         raise ValueError(f"actions {unknown} are not among the classifier's: {names}")
@@ -66,15 +66,9 @@ def measure(module, evaluators, items: list[dict], lengths: dict[str, int], n: i
 
 
 def summarise(result: dict) -> tuple[float, list[dict]]:
-    asked, predicted, names = (
-        np.array(result[k]) if k != "names" else result[k] for k in ("asked", "predicted", "names")
-    )
-    rows = []
-    for k in sorted(set(asked.tolist())):
-        sel = asked == k
-        wrong = predicted[sel][predicted[sel] != k]
-        rows.append({"action": names[k], "clips": int(sel.sum()), "generated": float((predicted[sel] == k).mean()),
-                     "real": float("nan"), "mistaken_for": names[int(np.bincount(wrong).argmax())] if wrong.size else ""})  # fmt: skip
+    """Accuracy over all motions and one row per asked action (no real clips: the real column is NaN)."""
+    asked, predicted = np.asarray(result["asked"]), np.asarray(result["predicted"])
+    rows = action_table.per_action_rows(asked, [predicted], None, result["names"])
     return float((asked == predicted).mean()), rows
 
 
@@ -99,7 +93,7 @@ def main(argv: list[str]) -> None:
     sampling = sampling_args(args)
     sampling.setdefault("guidance", module.default_guidance)
     n, seed = int(args.get("num_samples", 10)), int(args.get("seed", 0))
-    names = evaluators.meta["action"]["action_names"]
+    names = evaluators.action_names
     lengths = action_lengths(Path(args.get("data", REPO_DIR / "data" / dataset)), names, module.hparams.fps,
                              module.hparams.max_frames)  # fmt: skip
     start = time.perf_counter()

@@ -24,13 +24,14 @@ def confusion(asked: Sequence[int], predicted: Sequence[int], num_classes: int) 
 
 
 def per_action_rows(
-    asked: Sequence[int], generated: Sequence[Sequence[int]], real: Sequence[int], names: Sequence[str]
+    asked: Sequence[int], generated: Sequence[Sequence[int]], real: Sequence[int] | None, names: Sequence[str]
 ) -> list[dict]:
-    """One row per action that is asked for: clips, generated accuracy pooled over replications, real accuracy,
-    and the action the generated motions were most often mistaken for."""
+    """One row per action that is asked for: clips, generated accuracy pooled over replications, real accuracy
+    (NaN where there are no real clips, e.g. held-out descriptions) and the action the generated motions were most
+    often mistaken for."""
     asked = np.asarray(asked, dtype=int)
     gen = np.asarray(generated, dtype=int).reshape(-1, len(asked))  # (R, C)
-    real = np.asarray(real, dtype=int)
+    real = np.full(len(asked), -1) if real is None else np.asarray(real, dtype=int)
     rows = []
     for k in sorted(set(asked[asked >= 0].tolist())):
         clips = asked == k
@@ -40,7 +41,7 @@ def per_action_rows(
             "action": names[k],
             "clips": int(clips.sum()),
             "generated": float((got == k).mean()),
-            "real": float((real[clips] == k).mean()),
+            "real": float("nan") if (real[clips] < 0).all() else float((real[clips] == k).mean()),
             "mistaken_for": names[int(np.bincount(wrong).argmax())] if wrong.size else "",
         })  # fmt: skip
     return rows

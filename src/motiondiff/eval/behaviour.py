@@ -32,7 +32,6 @@ DEFAULT_PROMPTS = (
     ("a person kicks", 3.0, "kick"),
     ("a person bows", 3.0, "bow"),
 )
-TRAVELLING = ("walk", "run")  # labels whose generated travel is compared with the real clips'
 CONF_DIR = Path(__file__).resolve().parents[3] / "conf"
 
 
@@ -127,7 +126,7 @@ def classify(evaluators, features: list[np.ndarray]) -> np.ndarray:
 def report(module, data_root, n: int = 10, seed: int = 0, evaluators=None, prompts=DEFAULT_PROMPTS, **sampling) -> dict:
     """{prompt: {"label", "generated": Behaviour, "real": Behaviour, "predicted": names or None}} + unconditioned."""
     fps = module.hparams.fps
-    names = evaluators.meta["action"]["action_names"] if evaluators is not None and evaluators.action else None
+    names = evaluators.action_names if evaluators is not None and evaluators.action else None
     rows = {}
     for prompt, seconds, label in prompts:
         frames = round(seconds * fps)
@@ -212,7 +211,7 @@ def main(argv: list[str]) -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / "behaviour.md").write_text(markdown_report(rows, header))
     if evaluators is not None:
-        names = evaluators.meta["action"]["action_names"]
+        names = evaluators.action_names
         asked = [names.index(r["label"]) for r in rows.values() if r["predicted"] and r["label"] in names
                  for _ in r["predicted"]]  # fmt: skip
         got = [names.index(p) for r in rows.values() if r["predicted"] and r["label"] in names for p in r["predicted"]]

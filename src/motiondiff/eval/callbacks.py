@@ -88,7 +88,7 @@ class GenerationEvaluation(L.Callback):
         text = self.evaluators.embed_text(captions) if kind == "text" else None
         values = replication_metrics(kind, self.evaluators, real, gen, text=text, actions=clips.actions,
                                      generated_features=feats, seed=self.seed)  # fmt: skip
-        if self.action_accuracy and kind == "text" and self.evaluators.action is not None and clips.labelled:
+        if self.action_accuracy and self.evaluators.measures_action(kind, clips):
             generator.manual_seed(self.seed)
             labelled = generate(pl_module, clips.label_captions(), clips.lengths, self.batch_size, generator,
                                 guidance=guidance, **self.sampling)  # fmt: skip

@@ -150,6 +150,18 @@ class Evaluators:
                  for s in range(0, len(captions), self.batch_size)]  # fmt: skip
         return torch.cat(parts).double().numpy()
 
+    @property
+    def action_names(self) -> list[str]:
+        """The action classifier's label names, in its output order."""
+        if self.action is None:
+            raise ValueError("these evaluators have no action classifier")
+        return list(self.meta["action"]["action_names"])
+
+    def measures_action(self, kind: str, clips: EvalClips) -> bool:
+        """Whether motion of this condition kind for these clips gets an action accuracy: text models on labelled
+        data with an action classifier (does the motion do the action its caption names?)."""
+        return kind == "text" and self.action is not None and clips.labelled
+
     def fid_features(self, kind: str) -> str:
         """Which embedding FID/diversity use for a condition kind."""
         if kind == "text":
