@@ -6,7 +6,7 @@ import numpy as np
 from test_captions_and_splits import _rest_pose, _walk
 
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.eval.behaviour import Behaviour, mean_joint_speed, real_clips
+from motiondiff.eval.behaviour import Behaviour, mean_joint_acceleration, mean_joint_speed, real_clips
 
 
 def test_walk_and_raise_are_told_apart():
@@ -19,6 +19,18 @@ def test_walk_and_raise_are_told_apart():
     assert b.both_wrists_up.tolist() == [False, True]
     # the rest pose glides 3 m in 79 frames: every joint moves 3/79 m per frame
     assert abs(mean_joint_speed(walk, 20) - 3.0 / 79 * 20) < 1e-9 and b.speed[0] == mean_joint_speed(walk, 20)
+    assert b.accel[0] < 1e-6  # a constant glide has no acceleration
+
+
+def test_jitter_shows_in_the_acceleration_not_in_the_travel():
+    walk = _walk(0, 3.0, frames=80)
+    jittery = walk.copy()
+    jittery[1::2, 10, 1] += 0.1  # the left foot flips 10 cm up and down every frame
+    smooth, noisy = Behaviour.of([walk, jittery], fps=20).accel
+    assert smooth < 1e-6
+    # one joint of 22 moves +-0.1 m between frames: second differences of 0.2 m, so 0.2 * 400 / 22 m/s^2 on average
+    assert abs(noisy - 0.2 * 400 / 22) < 1e-3
+    assert abs(mean_joint_acceleration(jittery, 20) - noisy) < 1e-9
 
 
 def test_real_reference_clips_from_the_embedded_data():

@@ -24,7 +24,7 @@ from motiondiff.data.prepared import PreparedSplit
 from motiondiff.data.prepared import load_split as load_prepared_split
 from motiondiff.data.representation_spec import HMLBridge, bridge_from_spec, representation_spec
 from motiondiff.data.representations import Representation, get_representation
-from motiondiff.data.resumable import EpochShuffleSampler
+from motiondiff.data.resumable import EpochShuffleSampler, balance_weights
 from motiondiff.skeleton import SMPL22
 
 log = logging.getLogger(__name__)
@@ -54,8 +54,10 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         max_frames: int = 196,
         unit_length: int = 4,
         seed: int = 0,
+        balance: float = 0.0,
     ):
         super().__init__()
+        self.balance = float(balance)  # class-balanced training order: resumable.balance_weights
         self.batch_size = batch_size
         self.num_workers = num_workers
         self.max_frames = max_frames
@@ -136,7 +138,8 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         dataset = self.dataset(split)
         sampler = None
         if train:  # an order a resumed run can rebuild (motiondiff.data.resumable)
-            sampler = EpochShuffleSampler(len(dataset), self.seed)
+            weights = balance_weights([r.action for r in dataset.records], self.balance)
+            sampler = EpochShuffleSampler(len(dataset), self.seed, weights)
             if self.resume_position is not None:
                 sampler.resume(*self.resume_position)
                 self.resume_position = None
@@ -232,8 +235,9 @@ class ClipDataModule(MotionDataModule, abc.ABC):
         unit_length: int = 1,
         seed: int = 0,
         representation: str | None = None,
+        balance: float = 0.0,
     ):
-        super().__init__(batch_size, num_workers, max_frames, unit_length, seed)
+        super().__init__(batch_size, num_workers, max_frames, unit_length, seed, balance)
         self.min_frames = min_frames
         self.representation_name = representation or self.default_representation
         self._splits: dict[str, ClipSplit] = {}
@@ -334,8 +338,9 @@ class PreparedDataModule(ClipDataModule):
         seed: int = 0,
         representation: str | None = None,
         extra_train: list[str | Path] | None = None,
+        balance: float = 0.0,
     ):
-        super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation)
+        super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation, balance)
         self.root = Path(root)
         self.meta: dict = {}
         self._prepared: dict[str, PreparedSplit] = {}

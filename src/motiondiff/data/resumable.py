@@ -22,8 +22,21 @@ def mixed_seed(*parts: int) -> int:
 
 
 class EpochShuffleSampler(Sampler[tuple[int, int]]):
-    def __init__(self, size: int, seed: int = 0):
+    """Each epoch: a permutation of the clips, or with ``weights`` as many draws with replacement in proportion to
+    them (class-balanced training, `balance_weights`); either way a function of (seed, epoch) alone."""
+
+    def __init__(self, size: int, seed: int = 0, weights: np.ndarray | None = None):
         self.size, self.seed = int(size), int(seed)
+        if weights is not None:
+            weights = np.asarray(weights, dtype=np.float64)
+            if (
+                weights.shape != (self.size,)
+                or not np.all(np.isfinite(weights))
+                or weights.min() < 0
+                or weights.sum() <= 0
+            ):
+                raise ValueError(f"sampling weights must be {self.size} finite non-negative numbers, not all zero")
+        self.weights = None if weights is None else torch.from_numpy(weights)
         self.epoch = 0
         self._skip = 0
 
@@ -37,6 +50,8 @@ class EpochShuffleSampler(Sampler[tuple[int, int]]):
 
     def order(self, epoch: int) -> list[int]:
         generator = torch.Generator().manual_seed(mixed_seed(self.seed, epoch))
+        if self.weights is not None:
+            return torch.multinomial(self.weights, self.size, replacement=True, generator=generator).tolist()
         return torch.randperm(self.size, generator=generator).tolist()
 
     def __iter__(self) -> Iterator[tuple[int, int]]:
@@ -46,3 +61,17 @@ class EpochShuffleSampler(Sampler[tuple[int, int]]):
 
     def __len__(self) -> int:
         return self.size
+
+
+def balance_weights(labels: list[int] | np.ndarray, power: float) -> np.ndarray | None:
+    """Per-clip sampling weights count(label)^-power: 0 keeps the data's own frequencies (None), 1 makes every
+    label equally likely, 0.5 is in between (rare labels drawn more often without being repeated as much as at 1).
+    Clips without a label (negative ids) count as one group."""
+    if not power:
+        return None
+    if power < 0:
+        raise ValueError(f"balance must be >= 0 (0: off, 1: every label equally often), got {power}")
+    labels = np.asarray(labels)
+    keys = np.where(labels < 0, -1, labels)
+    _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    return counts[inverse].astype(np.float64) ** -float(power)

@@ -49,6 +49,7 @@ class Behaviour:
     both_wrists_up: np.ndarray  # bool: both wrists above the head for >= 0.3 s
     any_wrist_up: np.ndarray  # bool: either wrist above the head for >= 0.3 s
     speed: np.ndarray  # mean joint speed, m/s
+    accel: np.ndarray  # mean joint acceleration, m/s^2: frame-to-frame jitter shows here first
 
     @classmethod
     def of(cls, clips: list[np.ndarray], fps: float) -> Behaviour:
@@ -58,6 +59,7 @@ class Behaviour:
             both_wrists_up=np.array([len(f.hands_above_head) == 2 for f in facts]),
             any_wrist_up=np.array([len(f.hands_above_head) > 0 for f in facts]),
             speed=np.array([mean_joint_speed(j, fps) for j in clips]),
+            accel=np.array([mean_joint_acceleration(j, fps) for j in clips]),
         )
 
     def walk_success(self) -> np.ndarray:
@@ -69,6 +71,13 @@ class Behaviour:
 
 def mean_joint_speed(joints: np.ndarray, fps: float) -> float:
     return float(np.linalg.norm(np.diff(joints, axis=0), axis=-1).mean() * fps)
+
+
+def mean_joint_acceleration(joints: np.ndarray, fps: float) -> float:
+    """Mean norm of the joints' second differences in m/s^2 (0 for clips under 3 frames)."""
+    if len(joints) < 3:
+        return 0.0
+    return float(np.linalg.norm(np.diff(joints, n=2, axis=0), axis=-1).mean() * fps**2)
 
 
 def generate(
@@ -149,7 +158,7 @@ def print_report(rows: dict) -> None:
     """Counts per prompt; "walk ok" = travelled >= 1.5 m with no wrist above the head; "as asked" = samples the
     action classifier assigns the prompt's label."""
     print(f"{'prompt':<31}{'who':>10}{'n':>4}{'as asked':>9}{'travel m':>9}{'travel>=1.5m':>13}{'walk ok':>8}"
-          f"{'travel<=0.5m':>13}{'2 wrists up':>12}{'no wrist up':>12}{'speed m/s':>10}")  # fmt: skip
+          f"{'travel<=0.5m':>13}{'2 wrists up':>12}{'no wrist up':>12}{'speed m/s':>10}{'acc m/s2':>9}")  # fmt: skip
     for prompt, row in rows.items():
         for who in ("generated", "real"):
             b = row.get(who)
@@ -159,14 +168,15 @@ def print_report(rows: dict) -> None:
             asked = "" if who == "real" or row["predicted"] is None else str(row["predicted"].count(row["label"]))
             print(f"{prompt:<31}{who:>10}{k:>4}{asked:>9}{np.median(b.travel):>9.2f}{int((b.travel >= 1.5).sum()):>13}"
                   f"{int(b.walk_success().sum()):>8}{int(b.in_place().sum()):>13}"
-                  f"{int(b.both_wrists_up.sum()):>12}{int((~b.any_wrist_up).sum()):>12}{b.speed.mean():>10.2f}")  # fmt: skip
+                  f"{int(b.both_wrists_up.sum()):>12}{int((~b.any_wrist_up).sum()):>12}{b.speed.mean():>10.2f}"
+                  f"{b.accel.mean():>9.1f}")  # fmt: skip
 
 
 def markdown_report(rows: dict, header: list[str]) -> str:
     """behaviour.md: per prompt, the classifier's verdicts and travel/speed next to the real clips'."""
     lines = ["### Behaviour report", "", *[f"- {h}" for h in header], "",
              "| prompt | asked action | classified as asked | classified as (others) | median travel m (real) "
-             "| mean joint speed m/s (real) |", "|---|---|---:|---|---:|---:|"]  # fmt: skip
+             "| mean joint speed m/s (real) | mean joint acceleration m/s² (real) |", "|---|---|---:|---|---:|---:|---:|"]  # fmt: skip
     for prompt, row in rows.items():
         if row["label"] is None:
             continue
@@ -175,8 +185,10 @@ def markdown_report(rows: dict, header: list[str]) -> str:
         other_text = ", ".join(f"{p} {c}" for p, c in sorted(others.items(), key=lambda x: -x[1]))
         real_travel = f" ({np.median(real.travel):.2f})" if real is not None else " (no real clip)"
         real_speed = f" ({real.speed.mean():.2f})" if real is not None else ""
+        real_accel = f" ({real.accel.mean():.1f})" if real is not None else ""
         lines.append(f"| {prompt} | {row['label']} | {pred.count(row['label'])} of {len(gen.travel)} | {other_text} | "
-                     f"{np.median(gen.travel):.2f}{real_travel} | {gen.speed.mean():.2f}{real_speed} |")  # fmt: skip
+                     f"{np.median(gen.travel):.2f}{real_travel} | {gen.speed.mean():.2f}{real_speed} | "
+                     f"{gen.accel.mean():.1f}{real_accel} |")  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
