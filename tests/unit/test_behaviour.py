@@ -26,8 +26,10 @@ def test_jitter_shows_in_the_acceleration_not_in_the_travel():
     walk = _walk(0, 3.0, frames=80)
     jittery = walk.copy()
     jittery[1::2, 10, 1] += 0.1  # the left foot flips 10 cm up and down every frame
-    smooth, noisy = Behaviour.of([walk, jittery], fps=20).accel
+    b = Behaviour.of([walk, jittery], fps=20)
+    smooth, noisy = b.accel
     assert smooth < 1e-6
+    assert b.travel[1] == b.travel[0]  # the root path is untouched: travel cannot see the jitter
     # one joint of 22 moves +-0.1 m between frames: second differences of 0.2 m, so 0.2 * 400 / 22 m/s^2 on average
     assert abs(noisy - 0.2 * 400 / 22) < 1e-3
     assert abs(mean_joint_acceleration(jittery, 20) - noisy) < 1e-9
