@@ -187,6 +187,8 @@ CASES = [
     Case("edit_unknown_body_part", edit(CLIP, "kind=parts", "parts=[tail]"), UsageError, "unknown body part 'tail'"),
     Case("checkpoint_of_another_dataset", lambda tmp: run_entry("evaluate", tmp, "checkpoint=shipped", "dataset=kit", "wandb=false"),
          UsageError, "pass dataset=bandai_mini"),
+    Case("evaluate_smoothing_negative", lambda tmp: run_entry("evaluate", tmp, "checkpoint=shipped", "smooth_sigma=-1", "wandb=false"),
+         UsageError, "smooth_sigma is a Gaussian's width in frames"),
     # commands: train.py
     Case("batch_size_zero", train("batch_size=0"), UsageError, "batch_size=0: must be an integer >= 1"),
     Case("batch_size_not_a_number", train("batch_size=abc"), UsageError, "batch_size='abc'"),

@@ -48,3 +48,23 @@ def test_smoothing_jittery_motion_raises_the_smoothness_metric():
     assert smoothness(flat(smoothed)) > smoothness(flat(noisy))
     assert np.abs(smooth_joints(clip, 1.5) - clip).max() < 0.05  # a clean clip moves little
     assert smoothness_of_joints(clip[:3], SMPL22) is None  # too short to measure
+
+
+def test_smoothed_features_keep_their_rows_and_lower_the_joint_acceleration():
+    """evaluate.py's smooth_sigma: features of a real clip with frame-to-frame jitter added to the joints, smoothed
+    through the joints and re-encoded, keep their row count and width and lose most of the added acceleration."""
+    from motiondiff.data.features import features_from_joints, joints_from_features
+    from motiondiff.edit.smoothing import smooth_features
+
+    data = load_split(embedded_data_root(), "train")
+    joints = data.arrays["joints"][data.clip_slice(0)][:60].astype(np.float64)
+    jitter = np.random.default_rng(0).normal(0, 0.02, joints.shape)
+    feats = features_from_joints(joints + jitter, SMPL22)
+    smoothed = smooth_features(feats, 1.5)
+    assert smoothed.shape == feats.shape and smoothed.dtype == feats.dtype
+    assert np.array_equal(smooth_features(feats, None), feats) and np.array_equal(smooth_features(feats, 0), feats)
+
+    def accel(f):
+        return np.linalg.norm(np.diff(joints_from_features(f), n=2, axis=0), axis=-1).mean()
+
+    assert accel(smoothed) < 0.3 * accel(feats)

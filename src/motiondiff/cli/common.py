@@ -11,8 +11,12 @@ from pathlib import Path
 from omegaconf import DictConfig, OmegaConf
 
 REPO_DIR = Path(__file__).resolve().parents[3]
-# checkpoint=shipped: the small text model released with the repo (safetensors + JSON, see checkpoints/models)
-SHIPPED_MODEL = REPO_DIR / "checkpoints" / "models" / "bandai_mini_text_cpu.safetensors"
+# checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
+SHIPPED_MODELS = {
+    "text": REPO_DIR / "checkpoints" / "models" / "bandai_mini_text_cpu.safetensors",
+    "action": REPO_DIR / "checkpoints" / "models" / "bandai_action_cpu.safetensors",
+}
+SHIPPED_MODEL = SHIPPED_MODELS["text"]
 RELEASE_SUFFIXES = (".safetensors", ".json")
 
 
@@ -82,15 +86,16 @@ def to_dict(cfg: DictConfig | dict | None) -> dict | None:
     return dict(cfg)
 
 
-def find_checkpoint(spec: str, output_dir: str | Path) -> Path:
-    """A checkpoint path: a .ckpt or a release (.safetensors/.json); 'shipped': the model released with the repo;
-    'latest': the newest last.ckpt of a training run under output_dir/train; 'best': that run's best-FID one."""
+def find_checkpoint(spec: str, output_dir: str | Path, condition: str = "text") -> Path:
+    """A checkpoint path: a .ckpt or a release (.safetensors/.json); 'shipped': the model released with the repo
+    for that condition (text or action); 'latest': the newest last.ckpt of a training run under output_dir/train;
+    'best': that run's best-FID one."""
     if spec == "shipped":
-        if not SHIPPED_MODEL.is_file():
-            raise UsageError(
-                f"the shipped model {SHIPPED_MODEL} is missing: restore it with `git checkout -- checkpoints`"
-            )
-        return SHIPPED_MODEL
+        shipped = SHIPPED_MODELS[condition]
+        if not shipped.is_file():
+            raise UsageError(f"the shipped {condition} model {shipped} is missing: restore it with "
+                             "`git checkout -- checkpoints`")  # fmt: skip
+        return shipped
     if spec not in ("latest", "best"):
         path = Path(spec)
         if not path.is_file():

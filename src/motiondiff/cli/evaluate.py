@@ -47,6 +47,11 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None]:
     steps = cfg.steps if cfg.steps is not None else cfg.sampler.steps
     if steps is not None and not 1 <= steps <= module.diffusion.num_steps:
         raise UsageError(f"steps must be between 1 and {module.diffusion.num_steps}, got {steps}")
+    sigma = cfg.get("smooth_sigma")
+    if sigma is not None and (isinstance(sigma, bool) or not isinstance(sigma, int | float) or sigma < 0):
+        raise UsageError(
+            f"smooth_sigma is a Gaussian's width in frames (>= 0; 0: off, null: the model's default), got {sigma!r}"
+        )
     if cfg.replications < 1 or cfg.mm_replications < 0:
         raise UsageError("replications must be >= 1 and mm_replications >= 0")
     if module.hparams.dataset and module.hparams.dataset != cfg.dataset.name:
@@ -54,6 +59,15 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None]:
             f"the checkpoint was trained on {module.hparams.dataset!r}; pass dataset={module.hparams.dataset}"
         )
     return guidance, steps
+
+
+def smooth_sigma(cfg: DictConfig, module) -> float | None:
+    """The temporal smoothing evaluated: smooth_sigma= (0: off) or, when null, the model's default."""
+    sigma = module.default_smooth_sigma if cfg.get("smooth_sigma") is None else float(cfg.smooth_sigma)
+    layout = (module.hparams.get("representation") or {}).get("name", "hml263")
+    if sigma and layout not in ("hml263", "kit251"):
+        raise UsageError(f"smooth_sigma needs a model of HumanML3D/KIT features; this one generates {layout}")
+    return sigma or None
 
 
 def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict, dict, dict]:
@@ -66,7 +80,7 @@ def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict,
     train = EvalClips.from_dataset(dm.dataset("train"))
     real_test, real_train = evaluators.embed_motion(test.features), evaluators.embed_motion(train.features)
     sampling = {"guidance": guidance, "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta),
-                "precision": cfg.precision}  # fmt: skip
+                "precision": cfg.precision, "smooth_sigma": smooth_sigma(cfg, module)}  # fmt: skip
     common = {"diversity_pairs": cfg.diversity_pairs, "pool_size": cfg.pool_size, "knn_k": cfg.knn_k}
     reps: dict[str, list[dict]] = {"Real": [], "Model": []}
     timings = {"generation_s": 0.0, "motions": 0}
@@ -208,7 +222,8 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
         f"{cfg.replications} replications ({cfg.mm_replications} for MultiModality), mean ± 95% CI; "
         f"{len(EvalClips.from_dataset(dm.dataset(cfg.split)))} {cfg.split} clips; R-precision pools of "
         f"min({cfg.pool_size}, clips)",
-        f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}, {cfg.precision}; "
+        f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}, temporal smoothing "
+        f"sigma {smooth_sigma(cfg, module) or 'off'}, {cfg.precision}; "
         f"{timings['motions']} motions generated in {timings['generation_s']:.0f} s; whole evaluation {wall:.0f} s",
         "Real: real test clips scored against the real train clips",
     ]
@@ -219,7 +234,8 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
     report.write_markdown(out / "table.md", text)
     report.write_csv(out / "table.csv", table, protocol)
     extra = {"checkpoint": source, "real": {k: list(v) for k, v in rows["Real"].items()}, "wall_s": wall,
-             "timings": timings, "sampler": to_dict(cfg.sampler), "steps": steps, "replications": reps}  # fmt: skip
+             "timings": timings, "sampler": to_dict(cfg.sampler), "steps": steps,
+             "smooth_sigma": smooth_sigma(cfg, module), "replications": reps}  # fmt: skip
     report.write_summary_json(out / "metrics.json", guidance, rows["Model"], extra)
     if cfg.wandb:
         _log_wandb(out, cfg, table, {"checkpoint": source, "guidance": guidance})

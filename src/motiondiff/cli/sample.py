@@ -192,13 +192,13 @@ def run(cfg: DictConfig) -> Path:
     if cfg.get("method", "mdm") not in ("mdm", "vvmdm"):
         raise UsageError(f"unknown method={cfg.method!r}; choose mdm, vvmdm or guidedmotion")
     out = Path(HydraConfig.get().runtime.output_dir)
-    ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
+    ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir, "action" if cfg.action is not None else "text")
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
     formats = export_formats(cfg)
     module = load_module(ckpt, cfg.device)
     prompts = collect_prompts(plain, module)
     frames = num_frames(cfg, module) if seconds is None else None
-    sigma = smoothing_sigma(cfg)
+    sigma = smoothing_sigma(cfg, module)
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)
@@ -246,9 +246,12 @@ def export_formats(cfg: DictConfig) -> list[str]:
         raise UsageError(str(err)) from None
 
 
-def smoothing_sigma(cfg: DictConfig) -> float | None:
+def smoothing_sigma(cfg: DictConfig, module: MotionDiffusionModule | None = None) -> float | None:
+    """smooth_sigma= in frames; 0: off; null: the model's default (``default_smooth_sigma``, off for most)."""
     sigma = cfg.get("smooth_sigma")
-    if sigma is None or sigma == 0:
+    if sigma is None:
+        return module.default_smooth_sigma if module is not None else None
+    if sigma == 0:
         return None
     if isinstance(sigma, bool) or not isinstance(sigma, int | float) or not sigma > 0:
         raise UsageError(f"smooth_sigma is a Gaussian's width in frames (> 0; null or 0: off), got {sigma!r}")

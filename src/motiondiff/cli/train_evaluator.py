@@ -82,11 +82,13 @@ def train_action(cfg: DictConfig, dm: MotionDataModule) -> ActionClassifierGRU:
     classifier = ActionClassifierGRU(dm.num_joints * 3, c.hidden_size, c.num_layers, len(dm.action_names),
                                      c.feature_size, input_kind=c.input)  # fmt: skip
     module = ActionClassifierModule(classifier, dm.mean, dm.std, dm.num_joints, lr=c.lr, wd=c.weight_decay,
-                                    crop_min=c.crop_min, mirror=c.mirror, action_names=list(dm.action_names))  # fmt: skip
+                                    crop_min=c.crop_min, mirror=c.mirror, action_names=list(dm.action_names),
+                                    select_by=c.get("select_by", "accuracy"))  # fmt: skip
     seconds = _fit(cfg, module, dm, c.epochs)
     classifier.load_state_dict(module.best_state)
     classifier.train_info = {"epochs": c.epochs, "best_epoch": module.best_epoch, "seconds": round(seconds, 1),
-                             "val_accuracy": module.best_score}  # fmt: skip
+                             "selected_by": f"val {module.hparams.select_by}", "class_balance": dm.balance,
+                             **{f"val_{k}": v for k, v in module.best_scores.items()}}  # fmt: skip
     return classifier.eval()
 
 

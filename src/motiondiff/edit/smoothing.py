@@ -22,7 +22,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from motiondiff.data.features import canonicalize_joints, features_from_canonical
+from motiondiff.data.features import (
+    canonicalize_joints,
+    features_from_canonical,
+    features_from_joints,
+    joints_from_features,
+    skeleton_for_dim,
+)
 from motiondiff.eval.metrics import smoothness
 from motiondiff.skeleton import Skeleton
 
@@ -47,3 +53,15 @@ def smoothness_of_joints(joints: np.ndarray, skeleton: Skeleton, alpha: float = 
         return None
     feats = features_from_canonical(canonicalize_joints(joints, skeleton), skeleton)
     return smoothness(feats, alpha)
+
+
+def smooth_features(features: np.ndarray, sigma: float | None) -> np.ndarray:
+    """HumanML3D features (T, D) of one motion with its joints smoothed (``smooth_joints``) and re-encoded, the same
+    T rows (the last frame is repeated once, as the encoding drops one); None or 0 returns a copy. Evaluation
+    applies the filter here so that the metrics see the motion sample.py saves with the same ``smooth_sigma``."""
+    features = np.asarray(features)
+    if sigma is None or sigma == 0 or len(features) < 2:
+        return features.copy()
+    joints = smooth_joints(joints_from_features(features), sigma)
+    joints = np.concatenate([joints, joints[-1:]], axis=0)
+    return features_from_joints(joints, skeleton_for_dim(features.shape[-1])).astype(features.dtype)

@@ -92,6 +92,7 @@ def main(argv: list[str]) -> None:
     items = load_descriptions(args.get("captions", "paraphrases"))
     sampling = sampling_args(args)
     sampling.setdefault("guidance", module.default_guidance)
+    sampling.setdefault("smooth_sigma", module.default_smooth_sigma)
     n, seed = int(args.get("num_samples", 10)), int(args.get("seed", 0))
     names = evaluators.action_names
     lengths = action_lengths(Path(args.get("data", REPO_DIR / "data" / dataset)), names, module.hparams.fps,
@@ -103,7 +104,8 @@ def main(argv: list[str]) -> None:
     out.mkdir(parents=True, exist_ok=True)
     notes = [f"checkpoint: {ckpt}", f"descriptions: {args.get('captions', 'paraphrases')} ({len(items)}), "
              f"{n} samples each, seed {seed}; sampler {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
-             f"guidance {sampling['guidance']:g}; {time.perf_counter() - start:.0f} s",
+             f"guidance {sampling['guidance']:g}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}; "
+             f"{time.perf_counter() - start:.0f} s",
              f"accuracy over all {len(result['asked'])} motions: {accuracy:.3f}; lowest action: "
              f"{min(rows, key=lambda r: r['generated'])['action']} {min(r['generated'] for r in rows):.2f}",
              "clips = generated motions per action; the real column is empty (descriptions have no real clip)"]  # fmt: skip

@@ -89,10 +89,12 @@ def generate(
     guidance: float | None = None,
     sampler: str = "ddim",
     steps: int | None = None,
+    smooth_sigma: float | None = None,
 ) -> list[np.ndarray]:
     """n de-normalised feature sequences (frames, D) for a prompt (None: unconditioned), with the model's default
-    guidance unless given."""
+    guidance unless given; ``smooth_sigma`` > 0: vvMDM's temporal filter on the joints (``smooth_features``)."""
     from motiondiff.cli.sample import make_condition
+    from motiondiff.edit.smoothing import smooth_features
 
     frames = min(round(seconds * module.hparams.fps), module.hparams.max_frames)
     gen = torch.Generator().manual_seed(seed)
@@ -101,7 +103,7 @@ def generate(
     feats = module.sample(
         cond, torch.full((n,), frames), guidance=guidance, sampler=sampler, steps=steps, generator=gen, progress=True
     )
-    return list(module.denormalise(feats).cpu().numpy())
+    return [smooth_features(f, smooth_sigma) for f in module.denormalise(feats).cpu().numpy()]
 
 
 def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test")) -> list[np.ndarray]:
@@ -118,12 +120,14 @@ def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test"
 
 
 def sampling_args(args: dict[str, str]) -> dict:
-    """sampler=, steps=, guidance= of a key=value command line over sample.py's default sampler."""
+    """sampler=, steps=, guidance=, smooth_sigma= of a key=value command line over sample.py's default sampler."""
     sampling = default_sampler() if "sampler" not in args else {"sampler": args["sampler"], "steps": None}
     if "steps" in args:
         sampling["steps"] = int(args["steps"])
     if "guidance" in args:
         sampling["guidance"] = float(args["guidance"])
+    if "smooth_sigma" in args:
+        sampling["smooth_sigma"] = float(args["smooth_sigma"]) or None
     return sampling
 
 
@@ -133,9 +137,14 @@ def classify(evaluators, features: list[np.ndarray]) -> np.ndarray:
 
 
 def report(module, data_root, n: int = 10, seed: int = 0, evaluators=None, prompts=DEFAULT_PROMPTS, **sampling) -> dict:
-    """{prompt: {"label", "generated": Behaviour, "real": Behaviour, "predicted": names or None}} + unconditioned."""
+    """{prompt: {"label", "generated": Behaviour, "real": Behaviour, "predicted": names or None}} + unconditioned.
+    An action-conditioned model is asked with each prompt's label instead of its text (labels it lacks are left
+    out), so both kinds of model are measured on the same actions."""
     fps = module.hparams.fps
     names = evaluators.action_names if evaluators is not None and evaluators.action else None
+    if module.condition_kind == "action":
+        known = set(module.hparams.action_names)
+        prompts = tuple((label, seconds, label) for _, seconds, label in prompts if label in known)
     rows = {}
     for prompt, seconds, label in prompts:
         frames = round(seconds * fps)
@@ -211,9 +220,11 @@ def main(argv: list[str]) -> None:
     evaluators = Evaluators.load(evaluator_dir, module.hparams.num_joints).for_module(module) if any(
         evaluator_dir.glob("action.safetensors")) else None  # fmt: skip
     sampling = sampling_args(args)
+    sampling.setdefault("smooth_sigma", module.default_smooth_sigma)  # what sample.py gives users by default
     guidance = sampling.get("guidance", module.default_guidance)
     header = [f"checkpoint: {ckpt}", f"sampler: {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
-              f"guidance {guidance:g}, seed {args.get('seed', 0)}",
+              f"guidance {guidance:g}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}, "
+              f"seed {args.get('seed', 0)}",
               f"classifier: {evaluator_dir if evaluators else 'none (no action.safetensors): no verdicts'}"]  # fmt: skip
     print("\n".join(header))
     rows = report(module, data_root, int(args.get("num_samples", 10)), int(args.get("seed", 0)), evaluators,

@@ -234,13 +234,16 @@ def generate(
     generator: torch.Generator | None = None,
     progress=None,
     precision: str = "32-true",
+    smooth_sigma: float | None = None,
     **sampling,
 ) -> list[np.ndarray]:
     """De-normalised generated features, one per condition (caption, action id or None), at the given lengths.
     `sampling`: guidance, sampler, steps, eta (see MotionDiffusionModule.sample). `precision="bf16-mixed"` runs
     the denoiser under bf16 autocast, as it was trained by default (~2.7x faster on this project's CPU); any other
-    Lightning precision string samples in full precision."""
+    Lightning precision string samples in full precision. `smooth_sigma` > 0 applies vvMDM's temporal filter to the
+    decoded joints of every motion (HumanML3D features only; ``edit.smoothing.smooth_features``)."""
     from motiondiff.cli.sample import condition_batch
+    from motiondiff.edit.smoothing import smooth_features
 
     bf16 = str(precision).startswith("bf16")
 
@@ -255,7 +258,7 @@ def generate(
             feats = module.sample(cond, lens, generator=generator, **sampling)
         feats = module.denormalise(feats.float()).cpu().numpy()
         for row, i in enumerate(idx):
-            results[i] = feats[row, : int(lengths[i])]
+            results[i] = smooth_features(feats[row, : int(lengths[i])], smooth_sigma)
         if progress is not None:
             progress.update(len(idx))
     out = [results[i] for i in range(len(conditions))]

@@ -66,6 +66,9 @@ class MotionDiffusionModule(L.LightningModule):
             prediction=diffusion["prediction"],
             weighting=diffusion.get("weighting"),  # None: the prediction type's default (abar_t for v)
         )
+        # Input perturbation (Ning et al. 2023, DDPM-IP): x_t is built with noise ε + γ·ξ while the loss keeps ε, so
+        # the denoiser learns inputs that do not match its own noise exactly, as its sampled x_t never do.
+        self.input_perturbation = float(diffusion.get("input_perturbation") or 0.0)
         # How features decode to joints (None: HumanML3D features, as checkpoints from before representations).
         self.representation = representation_from_spec(representation, feature_dim)
         lambdas = {k: float(v) for k, v in (loss or {}).items() if k.startswith("lambda_")}
@@ -118,13 +121,18 @@ class MotionDiffusionModule(L.LightningModule):
         return None
 
     # ---- training -----------------------------------------------------------------------------------------------
-    def _loss(self, batch: dict, drop_prob: float) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
-        """Total loss and its parts: the diffusion loss, plus MDM's geometric terms when `loss` enables them."""
+    def _loss(
+        self, batch: dict, drop_prob: float, perturb: bool = True
+    ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """Total loss and its parts: the diffusion loss, plus MDM's geometric terms when `loss` enables them.
+        ``perturb``: apply the input perturbation (training only; validation measures the plain loss)."""
         x0, mask = batch["motion"], batch["mask"]
         b = x0.shape[0]
         t = torch.randint(0, self.diffusion.num_steps, (b,), device=x0.device)
         noise = torch.randn_like(x0)
-        x_t = self.diffusion.q_sample(x0, t, noise)
+        gamma = self.input_perturbation if perturb else 0.0
+        perturbed = noise + gamma * torch.randn_like(x0) if gamma else noise
+        x_t = self.diffusion.q_sample(x0, t, perturbed)
         drop = torch.rand(b, device=x0.device) < drop_prob
         known = {}
         if self.known_conditioning:
@@ -155,7 +163,7 @@ class MotionDiffusionModule(L.LightningModule):
         # A fixed generator per batch makes the validation loss comparable between evaluations.
         state = torch.get_rng_state()
         torch.manual_seed(batch_idx)
-        loss, _ = self._loss(batch, 0.0)
+        loss, _ = self._loss(batch, 0.0, perturb=False)
         torch.set_rng_state(state)
         self.log("val/loss", loss, prog_bar=True, batch_size=batch["motion"].shape[0], sync_dist=True)
 
@@ -232,6 +240,12 @@ class MotionDiffusionModule(L.LightningModule):
     @property
     def default_guidance(self) -> float:
         return float(self.hparams.model.get("sample_guidance", 2.5))
+
+    @property
+    def default_smooth_sigma(self) -> float | None:
+        """vvMDM temporal smoothing applied to this model's samples by default (Gaussian sigma in frames; None: off)."""
+        sigma = self.hparams.model.get("sample_smooth_sigma")
+        return float(sigma) if sigma else None
 
     def normalise(self, features: torch.Tensor) -> torch.Tensor:
         """De-normalised features -> what the denoiser works on (the inverse of ``denormalise``)."""

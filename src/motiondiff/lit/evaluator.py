@@ -185,12 +185,18 @@ class TextMotionEvaluatorModule(_BestWeights):
 class ActionClassifierModule(_BestWeights):
     """Two augmentations for small datasets: `crop_min` < 1 trains on random windows of at least that fraction of
     each clip (its label holds for most windows); `mirror` flips half the clips left/right and swaps labels that
-    name a side ("wave-left-hand" <-> "wave-right-hand"), so every left/right class sees both sides' examples."""
+    name a side ("wave-left-hand" <-> "wave-right-hand"), so every left/right class sees both sides' examples.
+    `select_by` picks the kept weights: "accuracy" over all val clips, or "balanced_accuracy" (the mean of the
+    per-class recalls over the classes present in val), which counts a class of 2 clips as much as one of 40."""
+
+    SELECT_BY = ("accuracy", "balanced_accuracy")
 
     def __init__(self, classifier: ActionClassifierGRU, mean: np.ndarray, std: np.ndarray, num_joints: int,
                  lr: float = 1e-3, wd: float = 1e-4, crop_min: float = 1.0, mirror: bool = False,
-                 action_names: list[str] | None = None):  # fmt: skip
+                 action_names: list[str] | None = None, select_by: str = "accuracy"):  # fmt: skip
         super().__init__()
+        if select_by not in self.SELECT_BY:
+            raise ValueError(f"select_by must be one of {self.SELECT_BY}, got {select_by!r}")
         self.save_hyperparameters(ignore=["classifier", "mean", "std"])
         if mirror:
             if not action_names:
@@ -200,7 +206,8 @@ class ActionClassifierModule(_BestWeights):
         self.classifier = classifier
         self.register_buffer("data_mean", torch.as_tensor(mean, dtype=torch.float32))
         self.register_buffer("data_std", torch.as_tensor(std, dtype=torch.float32))
-        self._correct = self._total = 0
+        self._correct = np.zeros(classifier.linear2.out_features)
+        self._total = np.zeros(classifier.linear2.out_features)
 
     def _logits(self, batch: dict, flip: torch.Tensor | None = None) -> torch.Tensor:
         raw = batch["motion"] * self.data_std + self.data_mean
@@ -232,12 +239,20 @@ class ActionClassifierModule(_BestWeights):
         return loss
 
     def validation_step(self, batch: dict, batch_idx: int) -> None:
-        pred = self._logits(batch).argmax(-1)
-        self._correct += int((pred == batch["action"]).sum())
-        self._total += len(pred)
+        pred = self._logits(batch).argmax(-1).cpu().numpy()
+        target = batch["action"].cpu().numpy()
+        np.add.at(self._total, target, 1)
+        np.add.at(self._correct, target, pred == target)
 
     def on_validation_epoch_end(self) -> None:
-        acc = self._correct / max(1, self._total)
-        self._correct = self._total = 0
-        self.log("val/accuracy", acc, prog_bar=True)
-        self._keep_if_best(acc, self.classifier)
+        present = self._total > 0
+        scores = {"accuracy": self._correct.sum() / max(1, self._total.sum()),
+                  "balanced_accuracy": float((self._correct[present] / self._total[present]).mean()) if present.any() else 0.0}  # fmt: skip
+        self._correct[:] = 0
+        self._total[:] = 0
+        for name, value in scores.items():
+            self.log(f"val/{name}", float(value), prog_bar=True)
+        self.val_scores = {k: float(v) for k, v in scores.items()}
+        self._keep_if_best(float(scores[self.hparams.select_by]), self.classifier)
+        if self.best_epoch == self.current_epoch:
+            self.best_scores = dict(self.val_scores)
