@@ -174,6 +174,19 @@ def test_shipped_model_samples_with_every_export(tmp_path):
     assert os.path.getsize(exports["html"]) > 1_000_000  # plotly.js inside: opens offline
 
 
+def test_shipped_action_model_samples_an_action_by_name(tmp_path):
+    """checkpoint=shipped with action= loads the released action-conditioned model (not the text one), and its
+    action names are the full Bandai set's."""
+    run_cli("sample.py", "checkpoint=shipped", "action=wave-right-hand", "num_samples=2", "length=1",
+            "sampler.steps=3", "export=none", env_dir=tmp_path)  # fmt: skip
+    out = next((tmp_path / "outputs" / "sample").iterdir())
+    summary = json.loads((out / "results.json").read_text())
+    assert summary["checkpoint"].endswith("bandai_action_cpu.safetensors")
+    assert len(summary["samples"]) == 2 and np.load(summary["samples"][0]["joints"]).shape[1:] == (22, 3)
+    proc = run_cli("sample.py", "checkpoint=shipped", "action=moonwalk", "export=none", env_dir=tmp_path, check=False)
+    assert proc.returncode == 2 and "unknown action 'moonwalk'" in proc.stderr and "wave-right-hand" in proc.stderr
+
+
 def test_bad_export_format_is_named_before_sampling(tmp_path):
     proc = run_cli("sample.py", "checkpoint=shipped", "text=a person waves", "export=[mp4,fbx]", env_dir=tmp_path,
                    check=False)  # fmt: skip

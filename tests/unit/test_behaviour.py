@@ -54,3 +54,20 @@ def test_report_samples_as_sample_py_does():
     assert default_sampler() == {"sampler": cfg.sampler.name, "steps": cfg.sampler.steps}
     asked = {label for _, _, label in DEFAULT_PROMPTS}
     assert {"walk", "run", "raise-up-both-hands", "wave-right-hand", "kick", "bow"} <= asked
+
+
+def test_an_action_model_is_asked_with_the_prompts_labels():
+    """The behaviour report of the released action-conditioned model: each prompt's label is the condition, and
+    the rows are the labels the model knows."""
+    import torch
+
+    from motiondiff.cli.common import SHIPPED_MODELS
+    from motiondiff.eval.behaviour import DEFAULT_PROMPTS, report
+    from motiondiff.release import load_release
+
+    module = load_release(SHIPPED_MODELS["action"])
+    assert module.condition_kind == "action"
+    torch.manual_seed(0)
+    rows = report(module, embedded_data_root(), n=2, steps=2, prompts=DEFAULT_PROMPTS[:2])
+    assert list(rows) == ["walk", "run"]
+    assert all(r["label"] == name and len(r["generated"].travel) == 2 for name, r in rows.items())
