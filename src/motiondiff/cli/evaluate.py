@@ -21,6 +21,7 @@ from omegaconf import DictConfig
 from tqdm import tqdm
 
 from motiondiff.cli.common import UsageError, find_checkpoint, to_dict
+from motiondiff.cli.sample import smoothing_sigma
 from motiondiff.cli.validate import RULES_EVALUATE, check
 from motiondiff.eval import action_table, report
 from motiondiff.eval.protocol import (
@@ -40,47 +41,38 @@ def _conditions(kind: str, clips: EvalClips, captions: list[str]) -> list:
     return {"text": captions, "action": [int(a) for a in clips.actions]}.get(kind, [None] * len(clips))
 
 
-def _check(cfg: DictConfig, module) -> tuple[float, int | None]:
+def _check(cfg: DictConfig, module) -> tuple[float, int | None, float | None]:
+    """(guidance, steps, smoothing sigma or None) as evaluated, after checking every setting."""
     guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)
     if guidance < 0:
         raise UsageError(f"guidance must be >= 0, got {guidance}")
     steps = cfg.steps if cfg.steps is not None else cfg.sampler.steps
     if steps is not None and not 1 <= steps <= module.diffusion.num_steps:
         raise UsageError(f"steps must be between 1 and {module.diffusion.num_steps}, got {steps}")
-    sigma = cfg.get("smooth_sigma")
-    if sigma is not None and (isinstance(sigma, bool) or not isinstance(sigma, int | float) or sigma < 0):
-        raise UsageError(
-            f"smooth_sigma is a Gaussian's width in frames (>= 0; 0: off, null: the model's default), got {sigma!r}"
-        )
     if cfg.replications < 1 or cfg.mm_replications < 0:
         raise UsageError("replications must be >= 1 and mm_replications >= 0")
     if module.hparams.dataset and module.hparams.dataset != cfg.dataset.name:
         raise UsageError(
             f"the checkpoint was trained on {module.hparams.dataset!r}; pass dataset={module.hparams.dataset}"
         )
-    return guidance, steps
-
-
-def smooth_sigma(cfg: DictConfig, module) -> float | None:
-    """The temporal smoothing evaluated: smooth_sigma= (0: off) or, when null, the model's default."""
-    sigma = module.default_smooth_sigma if cfg.get("smooth_sigma") is None else float(cfg.smooth_sigma)
+    sigma = smoothing_sigma(cfg, module)  # sample.py's rule: 0 off, null the model's default
     layout = (module.hparams.get("representation") or {}).get("name", "hml263")
     if sigma and layout not in ("hml263", "kit251"):
         raise UsageError(f"smooth_sigma needs a model of HumanML3D/KIT features; this one generates {layout}")
-    return sigma or None
+    return guidance, steps, sigma
 
 
 def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict, dict, dict]:
     """(rows {"Real": summary, "Model": summary}, per-replication values, timings). Text models on labelled data
     also generate once per replication from each clip's label caption (`action_accuracy`, predictions kept in
     timings["action_predictions"]); `action_accuracy_random` scores the motions of the random captions."""
-    guidance, steps = _check(cfg, module)
+    guidance, steps, sigma = _check(cfg, module)
     kind = module.condition_kind
     test = EvalClips.from_dataset(dm.dataset(cfg.split))
     train = EvalClips.from_dataset(dm.dataset("train"))
     real_test, real_train = evaluators.embed_motion(test.features), evaluators.embed_motion(train.features)
     sampling = {"guidance": guidance, "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta),
-                "precision": cfg.precision, "smooth_sigma": smooth_sigma(cfg, module)}  # fmt: skip
+                "precision": cfg.precision, "smooth_sigma": sigma}  # fmt: skip
     common = {"diversity_pairs": cfg.diversity_pairs, "pool_size": cfg.pool_size, "knn_k": cfg.knn_k}
     reps: dict[str, list[dict]] = {"Real": [], "Model": []}
     timings = {"generation_s": 0.0, "motions": 0}
@@ -205,7 +197,7 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
     """Evaluate `module` on `dm` with the evaluate.yaml settings in `cfg` and write table.md, table.csv and
     metrics.json (+ an offline W&B run) to `out`; returns the model's summary {metric: (mean, ci, n)}."""
     wall = time.perf_counter()
-    guidance, steps = _check(cfg, module)
+    guidance, steps, sigma = _check(cfg, module)
     try:
         evaluators = Evaluators.load(cfg.evaluator_dir, num_joints=module.hparams.num_joints).for_module(module)
     except FileNotFoundError as err:
@@ -223,7 +215,7 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
         f"{len(EvalClips.from_dataset(dm.dataset(cfg.split)))} {cfg.split} clips; R-precision pools of "
         f"min({cfg.pool_size}, clips)",
         f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}, temporal smoothing "
-        f"sigma {smooth_sigma(cfg, module) or 'off'}, {cfg.precision}; "
+        f"sigma {sigma or 'off'}, {cfg.precision}; "
         f"{timings['motions']} motions generated in {timings['generation_s']:.0f} s; whole evaluation {wall:.0f} s",
         "Real: real test clips scored against the real train clips",
     ]
@@ -235,7 +227,7 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
     report.write_csv(out / "table.csv", table, protocol)
     extra = {"checkpoint": source, "real": {k: list(v) for k, v in rows["Real"].items()}, "wall_s": wall,
              "timings": timings, "sampler": to_dict(cfg.sampler), "steps": steps,
-             "smooth_sigma": smooth_sigma(cfg, module), "replications": reps}  # fmt: skip
+             "smooth_sigma": sigma, "replications": reps}  # fmt: skip
     report.write_summary_json(out / "metrics.json", guidance, rows["Model"], extra)
     if cfg.wandb:
         _log_wandb(out, cfg, table, {"checkpoint": source, "guidance": guidance})

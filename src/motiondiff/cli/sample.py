@@ -254,7 +254,9 @@ def smoothing_sigma(cfg: DictConfig, module: MotionDiffusionModule | None = None
     if sigma == 0:
         return None
     if isinstance(sigma, bool) or not isinstance(sigma, int | float) or not sigma > 0:
-        raise UsageError(f"smooth_sigma is a Gaussian's width in frames (> 0; null or 0: off), got {sigma!r}")
+        raise UsageError(
+            f"smooth_sigma is a Gaussian's width in frames (> 0; 0: off, null: the model's default), got {sigma!r}"
+        )
     return float(sigma)
 
 
