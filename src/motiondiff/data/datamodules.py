@@ -55,8 +55,10 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         unit_length: int = 4,
         seed: int = 0,
         balance: float = 0.0,
+        window_min_frames: int | None = None,
     ):
         super().__init__()
+        self.window_min_frames = window_min_frames  # random training-window lengths: MotionDataset
         self.balance = float(balance)  # class-balanced training order: resumable.balance_weights
         self.batch_size = batch_size
         self.num_workers = num_workers
@@ -125,6 +127,7 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
                 unit_length=self.unit_length,
                 train=split == "train",
                 seed=self.seed,
+                window_min_frames=self.window_min_frames,
             )
         return self.datasets[split]
 
@@ -236,8 +239,9 @@ class ClipDataModule(MotionDataModule, abc.ABC):
         seed: int = 0,
         representation: str | None = None,
         balance: float = 0.0,
+        window_min_frames: int | None = None,
     ):
-        super().__init__(batch_size, num_workers, max_frames, unit_length, seed, balance)
+        super().__init__(batch_size, num_workers, max_frames, unit_length, seed, balance, window_min_frames)
         self.min_frames = min_frames
         self.representation_name = representation or self.default_representation
         self._splits: dict[str, ClipSplit] = {}
@@ -339,8 +343,11 @@ class PreparedDataModule(ClipDataModule):
         representation: str | None = None,
         extra_train: list[str | Path] | None = None,
         balance: float = 0.0,
+        window_min_frames: int | None = None,
     ):
-        super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation, balance)
+        super().__init__(
+            batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation, balance, window_min_frames
+        )
         self.root = Path(root)
         self.meta: dict = {}
         self._prepared: dict[str, PreparedSplit] = {}

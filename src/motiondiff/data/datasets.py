@@ -34,6 +34,10 @@ class MotionDataset(Dataset):
 
     `train=True`: a random caption and (for clips longer than `max_frames`) a random window each time;
     `train=False`: the first caption and the first window, so evaluation is repeatable.
+    `window_min_frames` (train only): the window length is also random, uniform in [min(length, window_min_frames),
+    min(length, max_frames)]. Without it every clip longer than `max_frames` is seen at exactly `max_frames`, so
+    where long clips are of other actions than short ones (Bandai: walks 130-210 frames, runs 50-100) the model
+    learns the length as a cue for the action, and a 4 s walk comes out as a run.
     Lengths are rounded down to a multiple of `unit_length` (the official HumanML3D loader uses 4).
     """
 
@@ -46,6 +50,7 @@ class MotionDataset(Dataset):
         unit_length: int = 1,
         train: bool = True,
         seed: int = 0,
+        window_min_frames: int | None = None,
     ):
         if not records:
             raise ValueError("MotionDataset got no clips: check the split file and the length limits")
@@ -57,6 +62,9 @@ class MotionDataset(Dataset):
         self.std = np.where(std < 1e-8, 1.0, std).astype(np.float32)  # constant dims stay finite
         self.max_frames = max_frames
         self.unit_length = unit_length
+        if window_min_frames is not None and window_min_frames < 1:
+            raise ValueError(f"window_min_frames must be a positive number of frames or null, got {window_min_frames}")
+        self.window_min_frames = window_min_frames
         self.train = train
         self.seed = int(seed or 0)
         self.rng = np.random.default_rng(seed)
@@ -84,6 +92,8 @@ class MotionDataset(Dataset):
             index, rng = key, self.rng
         rec = self.records[index]
         n = min(rec.length, self.max_frames)
+        if self.train and self.window_min_frames is not None:
+            n = int(rng.integers(min(n, self.window_min_frames), n + 1))
         n = max(self.unit_length, n - n % self.unit_length)
         start = 0
         if self.train and rec.length > n:
