@@ -217,7 +217,7 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
         f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}, temporal smoothing "
         f"sigma {sigma or 'off'}, {cfg.precision}; "
         f"{timings['motions']} motions generated in {timings['generation_s']:.0f} s; whole evaluation {wall:.0f} s",
-        "Real: real test clips scored against the real train clips",
+        f"Real: the real {cfg.split} clips scored against the real train clips",
     ]
     predictions = timings.pop("action_predictions", None)
     if predictions is not None:
