@@ -121,6 +121,19 @@ def find_checkpoint(spec: str, output_dir: str | Path, condition: str = "text") 
     return best[-1]
 
 
+def sampling_steps(cfg: DictConfig, module) -> int | None:
+    """The sampling steps to run: ``steps=`` as given (it must fit the model's T diffusion steps), else the sampler's
+    default capped at T, so a model trained with few steps (MDM Tab. 6, T = 10) samples with DDIM over its whole
+    chain instead of failing on DDIM-50. None: every step of the chain (DDPM's default)."""
+    num_steps = int(module.diffusion.num_steps)
+    if cfg.steps is not None:
+        if not 1 <= int(cfg.steps) <= num_steps:
+            raise UsageError(f"steps must be between 1 and the model's {num_steps} diffusion steps, got {cfg.steps}")
+        return int(cfg.steps)
+    default = cfg.sampler.steps
+    return None if default is None else min(int(default), num_steps)
+
+
 def text_encoder_kwargs(cfg_text: DictConfig | dict) -> dict:
     """Arguments of `build_text_encoder` from a text_encoder config (its `dim` is informational)."""
     return {k: v for k, v in to_dict(cfg_text).items() if k != "dim"}

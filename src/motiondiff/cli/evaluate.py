@@ -20,7 +20,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig
 from tqdm import tqdm
 
-from motiondiff.cli.common import UsageError, find_checkpoint, to_dict
+from motiondiff.cli.common import UsageError, find_checkpoint, sampling_steps, to_dict
 from motiondiff.cli.sample import smoothing_sigma
 from motiondiff.cli.validate import RULES_EVALUATE, check
 from motiondiff.eval import action_table, report
@@ -46,9 +46,7 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None, float | None]:
     guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)
     if guidance < 0:
         raise UsageError(f"guidance must be >= 0, got {guidance}")
-    steps = cfg.steps if cfg.steps is not None else cfg.sampler.steps
-    if steps is not None and not 1 <= steps <= module.diffusion.num_steps:
-        raise UsageError(f"steps must be between 1 and {module.diffusion.num_steps}, got {steps}")
+    steps = sampling_steps(cfg, module)
     if cfg.replications < 1 or cfg.mm_replications < 0:
         raise UsageError("replications must be >= 1 and mm_replications >= 0")
     if module.hparams.dataset and module.hparams.dataset != cfg.dataset.name:

@@ -18,7 +18,14 @@ import torch
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.cli.common import RELEASE_SUFFIXES, UsageError, find_checkpoint, text_encoder_kwargs, to_dict
+from motiondiff.cli.common import (
+    RELEASE_SUFFIXES,
+    UsageError,
+    find_checkpoint,
+    sampling_steps,
+    text_encoder_kwargs,
+    to_dict,
+)
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.data.captions import measure
 from motiondiff.data.representation_spec import bridge_from_spec
@@ -204,11 +211,7 @@ def run(cfg: DictConfig) -> Path:
     guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)
     if guidance < 0:
         raise UsageError(f"guidance must be >= 0, got {guidance}")
-    steps = cfg.steps if cfg.steps is not None else cfg.sampler.steps
-    if steps is not None and not 1 <= steps <= module.diffusion.num_steps:
-        raise UsageError(
-            f"steps must be between 1 and the model's {module.diffusion.num_steps} diffusion steps, got {steps}"
-        )
+    steps = sampling_steps(cfg, module)
     generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance}
     if seconds is not None:

@@ -346,7 +346,15 @@ class PreparedDataModule(ClipDataModule):
         window_min_frames: int | None = None,
     ):
         super().__init__(
-            batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation, balance, window_min_frames
+            batch_size,
+            num_workers,
+            max_frames,
+            min_frames,
+            unit_length,
+            seed,
+            representation,
+            balance,
+            window_min_frames,
         )
         self.root = Path(root)
         self.meta: dict = {}

@@ -58,6 +58,11 @@ class GenerationEvaluation(L.Callback):
         return any((self.evaluator_dir / f"{k}.safetensors").is_file() for k in ("text_motion", "action"))
 
     def setup(self, trainer: L.Trainer, pl_module: L.LightningModule, stage: str) -> None:
+        num_steps = int(pl_module.diffusion.num_steps)
+        if self.sampling["steps"] is not None and self.sampling["steps"] > num_steps:  # e.g. MDM Tab. 6, T = 10
+            log.info("evaluation samples with %s over all %d diffusion steps (asked %d)", self.sampling["sampler"],
+                     num_steps, self.sampling["steps"])  # fmt: skip
+            self.sampling["steps"] = num_steps
         if self.available and self.evaluators is None:
             self.evaluators = Evaluators.load(self.evaluator_dir, num_joints=pl_module.hparams.num_joints)
             self.evaluators.for_module(pl_module)

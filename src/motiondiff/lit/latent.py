@@ -53,7 +53,7 @@ class HierarchicalLatentModule(L.LightningModule):
         tokens = {level: self.vaes[level].tokens for level in LEVELS}
         latent_dim = self.vaes["motion"].vae.latent_dim
         self.denoiser = HierarchicalDenoiser(node_dim, latent_dim, tokens, **model)
-        betas = make_betas(diffusion.get("schedule", "linear"), int(diffusion.get("steps", 1000)),
+        betas = make_betas(diffusion.get("schedule", "scaled_linear"), int(diffusion.get("steps", 1000)),
                            beta_start=float(diffusion.get("beta_start", 8.5e-4)),
                            beta_end=float(diffusion.get("beta_end", 0.012)))  # fmt: skip
         # the paper predicts ε; diffusion.prediction=v (with weighting=snr_v, vvMDM) is the option for small runs, whose
