@@ -19,7 +19,13 @@ def test_the_latent_preset_uses_scaled_linear():
     with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
         cfg = compose("train_latent")
     d = cfg.diffusion
-    assert (d.schedule, d.steps, d.beta_start, d.beta_end, d.prediction) == ("scaled_linear", 1000, 8.5e-4, 0.012, "eps")
+    assert (d.schedule, d.steps, d.beta_start, d.beta_end, d.prediction) == (
+        "scaled_linear",
+        1000,
+        8.5e-4,
+        0.012,
+        "eps",
+    )
 
 
 def test_scaled_linear_by_hand():

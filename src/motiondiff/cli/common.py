@@ -134,6 +134,17 @@ def sampling_steps(cfg: DictConfig, module) -> int | None:
     return None if default is None else min(int(default), num_steps)
 
 
+def apply_clip_x0(cfg: DictConfig, module) -> str | None:
+    """clip_x0= (none | static | dynamic; null keeps the model's own rule) set on the module; returns the rule used."""
+    rule = cfg.get("clip_x0")
+    if rule is not None:
+        try:
+            module.set_clip_rule(str(rule))
+        except ValueError as err:
+            raise UsageError(f"clip_x0={rule}: {err}") from err
+    return module.clip_rule
+
+
 def text_encoder_kwargs(cfg_text: DictConfig | dict) -> dict:
     """Arguments of `build_text_encoder` from a text_encoder config (its `dim` is informational)."""
     return {k: v for k, v in to_dict(cfg_text).items() if k != "dim"}

@@ -20,7 +20,7 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig
 from tqdm import tqdm
 
-from motiondiff.cli.common import UsageError, find_checkpoint, sampling_steps, to_dict
+from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps, to_dict
 from motiondiff.cli.sample import smoothing_sigma
 from motiondiff.cli.validate import RULES_EVALUATE, check
 from motiondiff.eval import action_table, report
@@ -54,6 +54,7 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None, float | None]:
             f"the checkpoint was trained on {module.hparams.dataset!r}; pass dataset={module.hparams.dataset}"
         )
     sigma = smoothing_sigma(cfg, module)  # sample.py's rule: 0 off, null the model's default
+    apply_clip_x0(cfg, module)
     layout = (module.hparams.get("representation") or {}).get("name", "hml263")
     if sigma and layout not in ("hml263", "kit251"):
         raise UsageError(f"smooth_sigma needs a model of HumanML3D/KIT features; this one generates {layout}")
@@ -213,7 +214,7 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
         f"{len(EvalClips.from_dataset(dm.dataset(cfg.split)))} {cfg.split} clips; R-precision pools of "
         f"min({cfg.pool_size}, clips)",
         f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}, temporal smoothing "
-        f"sigma {sigma or 'off'}, {cfg.precision}; "
+        f"sigma {sigma or 'off'}, safe x̂0 {module.clip_rule or 'none'}, {cfg.precision}; "
         f"{timings['motions']} motions generated in {timings['generation_s']:.0f} s; whole evaluation {wall:.0f} s",
         f"Real: the real {cfg.split} clips scored against the real train clips",
     ]
@@ -225,7 +226,7 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
     report.write_csv(out / "table.csv", table, protocol)
     extra = {"checkpoint": source, "real": {k: list(v) for k, v in rows["Real"].items()}, "wall_s": wall,
              "timings": timings, "sampler": to_dict(cfg.sampler), "steps": steps,
-             "smooth_sigma": sigma, "replications": reps}  # fmt: skip
+             "smooth_sigma": sigma, "clip_x0": module.clip_rule, "replications": reps}  # fmt: skip
     report.write_summary_json(out / "metrics.json", guidance, rows["Model"], extra)
     if cfg.wandb:
         _log_wandb(out, cfg, table, {"checkpoint": source, "guidance": guidance})

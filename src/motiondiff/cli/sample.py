@@ -21,6 +21,7 @@ from omegaconf import DictConfig, ListConfig
 from motiondiff.cli.common import (
     RELEASE_SUFFIXES,
     UsageError,
+    apply_clip_x0,
     find_checkpoint,
     sampling_steps,
     text_encoder_kwargs,
@@ -212,8 +213,10 @@ def run(cfg: DictConfig) -> Path:
     if guidance < 0:
         raise UsageError(f"guidance must be >= 0, got {guidance}")
     steps = sampling_steps(cfg, module)
+    apply_clip_x0(cfg, module)
     generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
-    summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance}
+    summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "steps": steps,
+               "clip_x0": module.clip_rule}  # fmt: skip
     if seconds is not None:
         summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats))
         (out / "results.json").write_text(json.dumps(summary, indent=1))

@@ -58,6 +58,7 @@ def build_module(cfg: DictConfig, dm: MotionDataModule) -> MotionDiffusionModule
         text_encoder=to_dict(cfg.text_encoder) if kind == "text" else None,
         loss=to_dict(cfg.loss),
         known_conditioning=to_dict(cfg.known_conditioning) if cfg.get("known_conditioning") else None,
+        x0_range=[a.tolist() for a in dm.dataset("train").normalised_range()],
     )
 
 

@@ -75,6 +75,12 @@ class MotionDataset(Dataset):
     def normalise(self, motion: np.ndarray) -> np.ndarray:
         return (motion - self.mean) / self.std
 
+    def normalised_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per-feature (min, max) of the normalised clips: the range a sampler may clip x̂0 to (`diffusion.clip_x0`)."""
+        low = np.min([r.motion.min(0) for r in self.records], axis=0)
+        high = np.max([r.motion.max(0) for r in self.records], axis=0)
+        return self.normalise(low).astype(np.float32), self.normalise(high).astype(np.float32)
+
     def denormalise(self, motion):
         if isinstance(motion, torch.Tensor):
             return motion * torch.as_tensor(self.std, device=motion.device) + torch.as_tensor(

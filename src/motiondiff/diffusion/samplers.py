@@ -27,6 +27,8 @@ ModelFn = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
 X0Hook = Callable[[torch.Tensor, int], torch.Tensor]
 XtHook = Callable[[torch.Tensor, int], torch.Tensor]
 X0Guide = Callable[[Callable[[torch.Tensor], torch.Tensor], torch.Tensor, float, int], torch.Tensor]
+# safe x̂0: a bound c (clamp to [−c, c], guided-diffusion's clip_denoised) or a rule x̂0 -> x̂0 (diffusion.thresholding)
+ClipX0 = float | Callable[[torch.Tensor], torch.Tensor] | None
 
 
 def select_timesteps(num_steps: int, steps: int | None = None) -> list[int]:
@@ -79,7 +81,7 @@ def _predict_x0(
     x: torch.Tensor,
     t_model: torch.Tensor,
     t_proc: torch.Tensor,
-    clip_x0: float | None,
+    clip_x0: ClipX0,
     x0_hook: X0Hook | None,
     t_index: int,
     x0_guide: X0Guide | None,
@@ -87,7 +89,9 @@ def _predict_x0(
 ) -> torch.Tensor:
     def predict(x_t: torch.Tensor) -> torch.Tensor:
         x0_hat = diffusion.to_x0(model_fn(x_t, t_model), x_t, t_proc)
-        return x0_hat if clip_x0 is None else x0_hat.clamp(-clip_x0, clip_x0)
+        if clip_x0 is None:
+            return x0_hat
+        return clip_x0(x0_hat) if callable(clip_x0) else x0_hat.clamp(-clip_x0, clip_x0)
 
     x0 = predict(x) if x0_guide is None else x0_guide(predict, x, alpha_bar_t, t_index)
     return x0 if x0_hook is None else x0_hook(x0, t_index)
@@ -104,7 +108,7 @@ def ddpm_sample(
     x0_hook: X0Hook | None = None,
     xt_hook: XtHook | None = None,
     x0_guide: X0Guide | None = None,
-    clip_x0: float | None = None,
+    clip_x0: ClipX0 = None,
     progress: bool = False,
     steps: int | None = None,
     resample: int = 1,
@@ -166,7 +170,7 @@ def ddim_sample(
     x0_hook: X0Hook | None = None,
     xt_hook: XtHook | None = None,
     x0_guide: X0Guide | None = None,
-    clip_x0: float | None = None,
+    clip_x0: ClipX0 = None,
     progress: bool = False,
     resample: int = 1,
     device: torch.device | str | None = None,

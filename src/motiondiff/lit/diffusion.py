@@ -15,6 +15,7 @@ import torch
 
 from motiondiff.data.representation_spec import representation_from_spec
 from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, guided_model_fn, make_betas
+from motiondiff.diffusion.thresholding import make_threshold
 from motiondiff.edit.masks import part_keep
 from motiondiff.lit.known_masks import random_known_keep
 from motiondiff.losses import GeometricLoss
@@ -43,6 +44,7 @@ class MotionDiffusionModule(L.LightningModule):
         representation: dict | None = None,
         loss: dict | None = None,
         known_conditioning: dict | None = None,
+        x0_range: list[list[float]] | None = None,
     ):
         super().__init__()
         self.save_hyperparameters()
@@ -75,6 +77,16 @@ class MotionDiffusionModule(L.LightningModule):
         self.geometric = GeometricLoss(self.representation, **lambdas) if lambdas else None
         if self.geometric is not None and not self.geometric.active:
             self.geometric = None
+        # Safe x̂0 (guided-diffusion's clip_denoised, with the training data's per-feature range in place of images'
+        # [-1, 1]): an ε model's x̂0 = (x_t − √(1−ᾱ) ε̂)/√ᾱ multiplies any error in ε̂ by 1/√ᾱ, about 2e4 at the last
+        # step of the cosine schedule, and DDIM's first step carries it into x_t. diffusion.clip_x0: none | static |
+        # dynamic (motiondiff.diffusion.thresholding); none by default, chosen on val (docs/results/safe_x0).
+        self.clip_rule = diffusion.get("clip_x0") if x0_range is not None else None
+        make_threshold(self.clip_rule, torch.zeros(1), torch.ones(1))  # an unknown rule fails here, not at sampling
+        self.register_buffer("x0_low", torch.tensor(x0_range[0] if x0_range else [], dtype=torch.float32),
+                             persistent=False)  # fmt: skip
+        self.register_buffer("x0_high", torch.tensor(x0_range[1] if x0_range else [], dtype=torch.float32),
+                             persistent=False)  # fmt: skip
         self.register_buffer("mean", torch.tensor(mean, dtype=torch.float32))
         self.register_buffer("std", torch.tensor(std, dtype=torch.float32))
         # Caption features of the training data; rebuilt from the text cache at setup, not stored in checkpoints.
@@ -224,18 +236,26 @@ class MotionDiffusionModule(L.LightningModule):
         else:
             fn = guided_model_fn(self.denoiser, cond, guidance, mask=mask, **extra)
         shape = (b, n, self.hparams.feature_dim)
+        clip = make_threshold(self.clip_rule, self.x0_low, self.x0_high, mask=mask)
         if sampler == "ddim":
             return ddim_sample(
                 self.diffusion, fn, shape, steps=steps or 50, eta=eta, generator=generator,
                 x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress, resample=resample,
-                device=self.device,
+                device=self.device, clip_x0=clip,
             )  # fmt: skip
         if sampler == "ddpm":
             return ddpm_sample(
                 self.diffusion, fn, shape, steps=steps, generator=generator, x0_hook=x0_hook, xt_hook=xt_hook,
-                x0_guide=x0_guide, progress=progress, resample=resample, device=self.device,
+                x0_guide=x0_guide, progress=progress, resample=resample, device=self.device, clip_x0=clip,
             )  # fmt: skip
         raise ValueError(f"unknown sampler {sampler!r}; choose ddpm or ddim")
+
+    def set_clip_rule(self, rule: str) -> None:
+        """Sample with another safe-x̂0 rule (none | static | dynamic) than the one the model was trained with."""
+        make_threshold(rule, self.x0_low, self.x0_high)
+        if rule not in (None, "none") and not self.x0_low.numel():
+            raise ValueError("this model has no x0 range (trained before safe x̂0): only clip_x0=none is possible")
+        self.clip_rule = rule
 
     @property
     def default_guidance(self) -> float:
