@@ -8,6 +8,10 @@ both de-normalised, and FK = the representation's decode to joint positions (met
     L_foot = mean ‖(FK(x̂0)_{i+1} − FK(x̂0)_i) · f_i‖²                 f_i: ground-truth contacts of the feet joints
     L = L_diffusion + λ_pos L_pos + λ_vel L_vel + λ_foot L_foot
 
+f_i is the representation's own contact rule unless ``contact_threshold`` is set: then a foot joint is in contact
+where its ground-truth displacement to the next frame is at most that many metres (MDM's code for its a2m data:
+‖p_{i+1} − p_i‖ ≤ 0.01 m per frame; HumanML3D's rule is about 0.045 m).
+
 Means run over valid frames only (frame pairs for the two velocity terms); each sample counts once in the batch.
 The geometric terms are not scaled by the diffusion loss weight w(t) (MDM adds them unweighted).
 """
@@ -27,6 +31,7 @@ class GeometricLoss:
     lambda_pos: float = 1.0
     lambda_vel: float = 1.0
     lambda_foot: float = 1.0
+    contact_threshold: float | None = None  # metres per frame; None: the representation's rule
 
     @property
     def active(self) -> bool:
@@ -59,11 +64,19 @@ class GeometricLoss:
                     out["pos"] = masked_mean_per_sample(((pos - pos_hat) ** 2).sum(-1), mask)
                 if self.lambda_foot > 0:
                     with torch.no_grad():
-                        contacts = rep.foot_contacts(raw)[:, :-1]  # (B, N-1, F): contact at frame i
+                        contacts = self.contacts(pos, raw)  # (B, N-1, F): contact at frame i
                     feet = pos_hat[:, :, list(rep.contact_joints)]
                     slide = ((feet[:, 1:] - feet[:, :-1]) ** 2).sum(-1) * contacts
                     out["foot"] = masked_mean_per_sample(slide, pair_mask)
         return out
+
+    def contacts(self, pos: torch.Tensor, raw: torch.Tensor) -> torch.Tensor:
+        """(B, N-1, F) 0/1 ground-truth contacts of the contact joints at frames 0..N-2."""
+        if self.contact_threshold is None:
+            return self.representation.foot_contacts(raw)[:, :-1]
+        feet = pos[:, :, list(self.representation.contact_joints)]
+        step = (feet[:, 1:] - feet[:, :-1]).norm(dim=-1)
+        return (step <= self.contact_threshold).to(pos.dtype)
 
     def __call__(self, x0_hat, x0, mask, mean, std) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
         """(λ-weighted sum averaged over the batch, {term: batch mean}) for logging."""

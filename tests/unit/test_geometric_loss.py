@@ -78,3 +78,22 @@ def test_contact_source_of_hml_is_its_channels():
     rec = dm.dataset("val").records[0]
     feats = torch.as_tensor(rec.motion, dtype=torch.float64)
     np.testing.assert_array_equal(dm.representation.foot_contacts(feats).numpy(), rec.motion[:, -4:] > 0.5)
+
+
+def test_mdm_contact_rule_by_hand():
+    """contact_threshold=0.01: a foot joint is in contact at frame i where its true position moves at most 1 cm to
+    frame i+1 (MDM's a2m rule), whatever the representation's own rule says."""
+    from motiondiff.data.representations import get_representation
+    from motiondiff.skeleton import SMPL22
+
+    rep = get_representation("jp", SMPL22)
+    n, j = 4, rep.skeleton.num_joints
+    pos = torch.zeros(1, n, j, 3, dtype=torch.float64)
+    foot = rep.contact_joints[0]
+    pos[0, 1, foot, 0] = 0.009  # 0.9 cm: contact at frame 0
+    pos[0, 2, foot, 0] = 0.009 + 0.011  # 1.1 cm: no contact at frame 1
+    pos[0, 3, foot, 2] = 0.02  # 2.0 cm (the x step back and z step): no contact at frame 2
+    contacts = GeometricLoss(rep, contact_threshold=0.01).contacts(pos, None)
+    assert contacts.shape == (1, n - 1, len(rep.contact_joints))
+    assert contacts[0, :, 0].tolist() == [1.0, 0.0, 0.0]
+    assert bool((contacts[0, :, 1:] == 1).all())  # the other contact joints stand still

@@ -84,6 +84,7 @@ def paper_settings(preset: str) -> dict[str, tuple[object, str]]:
     rows["condition.kind"] = ("none" if preset.endswith("unconstrained") else "action", "MDM Tab. 3/5")
     rows["condition.drop_prob"] = (0.0, MDM_A2M)
     rows["model.sample_guidance"] = (1.0, MDM_A2M)
+    rows["loss.contact_threshold"] = (0.01, "MDM's code for a2m: foot contact where ‖Δp‖ ≤ 0.01 m per frame")
     geo = next((v for k, v in GEOMETRIC.items() if preset.endswith(k)), (1.0, 1.0, 1.0))
     rows.update({f"loss.lambda_{k}": (v, "MDM Tab. 3/7") for k, v in zip(("pos", "vel", "foot"), geo, strict=True)})
     return rows
