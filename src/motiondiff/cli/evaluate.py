@@ -61,11 +61,14 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None, float | None]:
     return guidance, steps, sigma
 
 
-def evaluate(cfg: DictConfig, module, evaluators: Evaluators, dm) -> tuple[dict, dict, dict]:
-    """(rows {"Real": summary, "Model": summary}, per-replication values, timings). Text models on labelled data
-    also generate once per replication from each clip's label caption (`action_accuracy`, predictions kept in
-    timings["action_predictions"]); `action_accuracy_random` scores the motions of the random captions."""
-    guidance, steps, sigma = _check(cfg, module)
+def evaluate(
+    cfg: DictConfig, module, evaluators: Evaluators, dm, checked: tuple[float, int | None, float | None]
+) -> tuple[dict, dict, dict]:
+    """(rows {"Real": summary, "Model": summary}, per-replication values, timings), with ``checked`` the
+    (guidance, steps, sigma) from `_check`. Text models on labelled data also generate once per replication from
+    each clip's label caption (`action_accuracy`, predictions kept in timings["action_predictions"]);
+    `action_accuracy_random` scores the motions of the random captions."""
+    guidance, steps, sigma = checked
     kind = module.condition_kind
     test = EvalClips.from_dataset(dm.dataset(cfg.split))
     train = EvalClips.from_dataset(dm.dataset("train"))
@@ -196,14 +199,14 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
     """Evaluate `module` on `dm` with the evaluate.yaml settings in `cfg` and write table.md, table.csv and
     metrics.json (+ an offline W&B run) to `out`; returns the model's summary {metric: (mean, ci, n)}."""
     wall = time.perf_counter()
-    guidance, steps, sigma = _check(cfg, module)
+    checked = guidance, steps, sigma = _check(cfg, module)
     try:
         evaluators = Evaluators.load(cfg.evaluator_dir, num_joints=module.hparams.num_joints).for_module(module)
     except FileNotFoundError as err:
         raise UsageError(str(err)) from None
     if module.condition_kind == "text" and evaluators.text_motion is None:
         raise UsageError(f"{cfg.evaluator_dir} has no text_motion evaluator, which text models are evaluated with")
-    rows, reps, timings = evaluate(cfg, module, evaluators, dm)
+    rows, reps, timings = evaluate(cfg, module, evaluators, dm, checked)
     wall = time.perf_counter() - wall
     protocol = PROTOCOL[module.condition_kind]
     name = f"{module.hparams.dataset} {module.condition_kind} model"

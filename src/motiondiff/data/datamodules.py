@@ -345,17 +345,8 @@ class PreparedDataModule(ClipDataModule):
         balance: float = 0.0,
         window_min_frames: int | None = None,
     ):
-        super().__init__(
-            batch_size,
-            num_workers,
-            max_frames,
-            min_frames,
-            unit_length,
-            seed,
-            representation,
-            balance,
-            window_min_frames,
-        )
+        super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation, balance,
+                         window_min_frames)  # fmt: skip
         self.root = Path(root)
         self.meta: dict = {}
         self._prepared: dict[str, PreparedSplit] = {}

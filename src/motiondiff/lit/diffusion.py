@@ -82,12 +82,12 @@ class MotionDiffusionModule(L.LightningModule):
         # [-1, 1]): an ε model's x̂0 = (x_t − √(1−ᾱ) ε̂)/√ᾱ multiplies any error in ε̂ by 1/√ᾱ, about 2e4 at the last
         # step of the cosine schedule, and DDIM's first step carries it into x_t. diffusion.clip_x0: none | static |
         # dynamic (motiondiff.diffusion.thresholding); none by default, chosen on val (docs/results/safe_x0).
-        self.clip_rule = diffusion.get("clip_x0") if x0_range is not None else None
-        make_threshold(self.clip_rule, torch.zeros(1), torch.ones(1))  # an unknown rule fails here, not at sampling
         self.register_buffer("x0_low", torch.tensor(x0_range[0] if x0_range else [], dtype=torch.float32),
                              persistent=False)  # fmt: skip
         self.register_buffer("x0_high", torch.tensor(x0_range[1] if x0_range else [], dtype=torch.float32),
                              persistent=False)  # fmt: skip
+        self.clip_rule = None
+        self.set_clip_rule(diffusion.get("clip_x0") if x0_range is not None else None)  # a bad rule fails here
         self.register_buffer("mean", torch.tensor(mean, dtype=torch.float32))
         self.register_buffer("std", torch.tensor(std, dtype=torch.float32))
         # Caption features of the training data; rebuilt from the text cache at setup, not stored in checkpoints.
@@ -251,10 +251,9 @@ class MotionDiffusionModule(L.LightningModule):
             )  # fmt: skip
         raise ValueError(f"unknown sampler {sampler!r}; choose ddpm or ddim")
 
-    def set_clip_rule(self, rule: str) -> None:
+    def set_clip_rule(self, rule: str | None) -> None:
         """Sample with another safe-x̂0 rule (none | static | dynamic) than the one the model was trained with."""
-        make_threshold(rule, self.x0_low, self.x0_high)
-        if rule not in (None, "none") and not self.x0_low.numel():
+        if make_threshold(rule, self.x0_low, self.x0_high) is not None and not self.x0_low.numel():
             raise ValueError("this model has no x0 range (trained before safe x̂0): only clip_x0=none is possible")
         self.clip_rule = rule
 
