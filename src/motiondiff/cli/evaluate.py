@@ -23,7 +23,8 @@ from tqdm import tqdm
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps, to_dict
 from motiondiff.cli.sample import smoothing_sigma
 from motiondiff.cli.validate import RULES_EVALUATE, check
-from motiondiff.eval import action_table, report
+from motiondiff.eval import action_table, official, report
+from motiondiff.eval import metrics as M
 from motiondiff.eval.protocol import (
     EvalClips,
     Evaluators,
@@ -61,6 +62,21 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None, float | None]:
     return guidance, steps, sigma
 
 
+def load_evaluators(cfg: DictConfig, module, dm) -> Evaluators:
+    """`evaluator=released`: the project's evaluators of the dataset (evaluator_dir); `evaluator=official`: the
+    papers' own (motiondiff.eval.official, files under official_dir)."""
+    try:
+        if cfg.evaluator == "official":
+            if not cfg.official_dir:
+                raise UsageError(f"evaluator=official needs official_dir=<folder>, laid out as:\n{official.LAYOUT}")
+            evaluators = official.official_evaluators(cfg.dataset.name, cfg.official_dir, module, dm)
+        else:
+            evaluators = Evaluators.load(cfg.evaluator_dir, num_joints=module.hparams.num_joints)
+    except (FileNotFoundError, ValueError, KeyError) as err:
+        raise UsageError(str(err).strip("'\"")) from None
+    return evaluators.for_module(module)
+
+
 def evaluate(
     cfg: DictConfig, module, evaluators: Evaluators, dm, checked: tuple[float, int | None, float | None]
 ) -> tuple[dict, dict, dict]:
@@ -71,6 +87,8 @@ def evaluate(
     guidance, steps, sigma = checked
     kind = module.condition_kind
     test = EvalClips.from_dataset(dm.dataset(cfg.split))
+    if evaluators.meta.get("source") == "official" and evaluators.text_motion is not None:
+        evaluators.text_motion.use_tokens(test.tokens)  # the official loader embeds the texts files' own tokens
     train = EvalClips.from_dataset(dm.dataset("train"))
     real_test, real_train = evaluators.embed_motion(test.features), evaluators.embed_motion(train.features)
     sampling = {"guidance": guidance, "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta),
@@ -105,6 +123,11 @@ def evaluate(
             values = replication_metrics(kind, evaluators, real_test, generated, text=text,
                                          actions=test.actions, generated_features=evaluators.as_hml(feats), seed=seed,
                                          **common)  # fmt: skip
+            if kind == "action" and set(train.ids) != set(test.ids):  # MDM Tab. 4 (UESTC): FID against train too
+                key = evaluators.fid_features(kind)
+                values["fid_train"] = M.frechet_distance(*M.gaussian_statistics(real_train[key]),
+                                                         *M.gaussian_statistics(generated[key]))  # fmt: skip
+                reps["Real"][-1]["fid_train"] = reps["Real"][-1]["fid"]  # Real's FID is the one against train
             if with_action:
                 reps["Real"][-1].update(action_accuracy=real_accuracy, action_accuracy_random=real_accuracy)
                 values["action_accuracy_random"] = action_accuracy(evaluators, generated, test.actions)
@@ -200,10 +223,7 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
     metrics.json (+ an offline W&B run) to `out`; returns the model's summary {metric: (mean, ci, n)}."""
     wall = time.perf_counter()
     checked = guidance, steps, sigma = _check(cfg, module)
-    try:
-        evaluators = Evaluators.load(cfg.evaluator_dir, num_joints=module.hparams.num_joints).for_module(module)
-    except FileNotFoundError as err:
-        raise UsageError(str(err)) from None
+    evaluators = load_evaluators(cfg, module, dm)
     if module.condition_kind == "text" and evaluators.text_motion is None:
         raise UsageError(f"{cfg.evaluator_dir} has no text_motion evaluator, which text models are evaluated with")
     rows, reps, timings = evaluate(cfg, module, evaluators, dm, checked)

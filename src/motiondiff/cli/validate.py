@@ -76,6 +76,7 @@ RULES_SAMPLE = {**COMMON, "num_samples": POSITIVE_INT}
 RULES_EVALUATE = {
     **COMMON, "replications": POSITIVE_INT, "mm_replications": Rule(int, low=0), "guidance": Rule(float, low=0, optional=True),
     "steps": Rule(int, low=1, optional=True), "batch_size": POSITIVE_INT,
+    "evaluator": Rule(str, choices=("released", "official")),
 }  # fmt: skip
 
 

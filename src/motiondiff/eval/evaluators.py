@@ -29,6 +29,7 @@ from motiondiff.data.features import feature_slices, joints_from_features, recov
 from motiondiff.eval.word_vectors import POS_CATEGORIES, Vocabulary, load_glove, sequence, tag_captions
 
 FOOT_CONTACT_DIMS = 4
+OFFICIAL_MAX_FRAMES = 196  # the official loader's max_motion_length
 _PAD_FRAMES = 8  # the last 4 feature dims (foot contacts) are not seen by the movement encoder
 
 
@@ -124,6 +125,7 @@ class TextMotionEvaluator(nn.Module):
         self.register_buffer("mean", torch.zeros(feature_dim))
         self.register_buffer("std", torch.ones(feature_dim))
         self._tagged: dict[str, list[tuple[str, str]]] = {}
+        self.pad_to: int | None = None  # official: every motion zero-padded to this many frames (196)
 
     @property
     def words(self) -> list[str]:
@@ -137,14 +139,16 @@ class TextMotionEvaluator(nn.Module):
     # -- motion --
     def normalised_input(self, features: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
         """De-normalised features (B, N, D) -> what the movement encoder reads: the evaluator's normalisation,
-        foot contacts dropped, zeros past each length and 8 zero frames appended. The official loader pads every
-        motion with zeros to 196 frames, so its convolutions near a clip's end see zero frames, never their own
-        border; 8 zero frames cover their reach: the official embedding, whatever else is in the batch."""
+        foot contacts dropped, zeros past each length, then zero frames appended. The official loader pads every
+        motion with zeros to 196 frames (`pad_to`, set by `load_official_t2m_evaluator`), so its convolutions see
+        zero frames after a shorter clip's end and their own border after a 196-frame one; without `pad_to` (our
+        evaluators, trained so) 8 zero frames, which cover the convolutions' reach after every clip."""
         features = features.to(self.mean)
         x = (features - self.mean) / self.std
         valid = torch.arange(x.shape[1], device=x.device)[None] < lengths.to(x.device)[:, None]
         x = x * valid[..., None]
-        return torch.nn.functional.pad(x[..., :-FOOT_CONTACT_DIMS], (0, 0, 0, _PAD_FRAMES))
+        extra = _PAD_FRAMES if self.pad_to is None else max(0, self.pad_to - x.shape[1])
+        return torch.nn.functional.pad(x[..., :-FOOT_CONTACT_DIMS], (0, 0, 0, extra))
 
     def encode_motion(self, features: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
         """De-normalised features (B, N, D), lengths (B,) -> (B, output_size)."""
@@ -167,6 +171,12 @@ class TextMotionEvaluator(nn.Module):
             pos[i, torch.arange(len(p)), torch.tensor(p)] = 1.0
         return ids, pos, lengths
 
+    def use_tokens(self, tokens: dict[str, list[str]]) -> None:
+        """Tag these captions with the dataset's own "word/POS" tokens (HumanML3D/KIT texts files), as the official
+        loader does, instead of tagging them again with spaCy."""
+        for caption, toks in tokens.items():
+            self._tagged[caption] = [tuple(t.rsplit("/", 1)) if "/" in t else (t, "OTHER") for t in toks]
+
     def encode_text(self, captions: list[str]) -> torch.Tensor:
         ids, pos, lengths = self.tokenize(captions)
         device = self.mean.device
@@ -174,10 +184,11 @@ class TextMotionEvaluator(nn.Module):
 
 
 def load_official_t2m_evaluator(
-    checkpoint: str | Path, glove_dir: str | Path, mean: str | Path, std: str | Path, dataset: str = "t2m"
+    checkpoint: str | Path, glove_dir: str | Path, mean, std, dataset: str = "t2m"
 ) -> TextMotionEvaluator:
     """The official evaluator: `<dataset>/text_mot_match/model/finest.tar`, the `glove/` folder, and the evaluator's
-    Mean/Std (`<dataset>/Comp_v6_KLD01/meta/{mean,std}.npy`). dataset: "t2m" (HumanML3D, 263) or "kit" (251)."""
+    Mean/Std (paths of `<dataset>/Comp_v6_KLD01/meta/{mean,std}.npy`, or arrays). dataset: "t2m" (HumanML3D, 263)
+    or "kit" (251)."""
     dims = {"t2m": 263, "kit": 251}
     if dataset not in dims:
         raise ValueError(f"dataset={dataset!r}: the official evaluators exist for 't2m' (HumanML3D) and 'kit'")
@@ -189,7 +200,8 @@ def load_official_t2m_evaluator(
         if name not in state:
             raise KeyError(f"{checkpoint} has no {name!r}: is it the text_mot_match finest.tar?")
         getattr(model, name).load_state_dict(state[name], strict=True)
-    model.set_normalisation(np.load(mean), np.load(std))
+    model.pad_to = OFFICIAL_MAX_FRAMES
+    model.set_normalisation(*(np.load(s) if isinstance(s, (str, Path)) else s for s in (mean, std)))
     return model.eval()
 
 

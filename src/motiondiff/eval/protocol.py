@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +40,7 @@ class EvalClips:
     features: list[np.ndarray]  # (N_i, D) de-normalised
     captions: list[list[str]]
     actions: np.ndarray  # (C,) label ids, -1 = none
+    tokens: dict[str, list[str]] = field(default_factory=dict)  # caption -> its "word/POS" tokens, where the data has them
 
     @classmethod
     def from_dataset(cls, ds: MotionDataset, max_clips: int | None = None, seed: int = 0) -> EvalClips:
@@ -47,7 +48,7 @@ class EvalClips:
         index = np.arange(len(ds))
         if max_clips is not None and max_clips < len(ds):
             index = np.sort(np.random.default_rng(seed).choice(len(ds), max_clips, replace=False))
-        ids, feats, caps, acts = [], [], [], []
+        ids, feats, caps, acts, tokens = [], [], [], [], {}
         for i in index:
             rec = ds.records[int(i)]
             n = min(rec.length, ds.max_frames)
@@ -56,7 +57,9 @@ class EvalClips:
             feats.append(rec.motion[:n].astype(np.float32))
             caps.append(list(rec.texts))
             acts.append(rec.action)
-        return cls(ids, feats, caps, np.array(acts))
+            for text, toks in zip(rec.texts, rec.meta.get("tokens") or [], strict=False):
+                tokens.setdefault(text, list(toks))
+        return cls(ids, feats, caps, np.array(acts), tokens)
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -99,6 +102,9 @@ class Evaluators:
         self.batch_size = batch_size
         # Features of another representation -> the HumanML3D features the evaluators read (None: already those).
         self.bridge: Callable[[np.ndarray], np.ndarray] | None = None
+        # An official classifier that reads the model's own features (24 SMPL joints or rotations, see
+        # motiondiff.eval.official): called on them directly instead of on the HumanML3D bridge.
+        self.action_reader: Callable[[list[np.ndarray]], tuple[torch.Tensor, torch.Tensor]] | None = None
 
     def for_module(self, module) -> Evaluators:
         """Read the features of `module`'s representation (real clips and samples go through the same bridge)."""
@@ -131,13 +137,16 @@ class Evaluators:
     def embed_motion(self, features: list[np.ndarray]) -> dict[str, np.ndarray]:
         """De-normalised features of clips -> {"text_motion": (C, E), "action_features": (C, F), "action_logits"}."""
         out: dict[str, list] = {}
-        features = self.as_hml(features)
+        own, features = features, self.as_hml(features)
         for s in range(0, len(features), self.batch_size):
             x, lengths = pad(features[s : s + self.batch_size])
             if self.text_motion is not None:
                 out.setdefault("text_motion", []).append(self.text_motion.encode_motion(x, lengths))
-            if self.action is not None:
+            if self.action_reader is not None:
+                logits, feats = self.action_reader(own[s : s + self.batch_size])
+            elif self.action is not None:
                 logits, feats = self.action(motion_input(self.action, x, self.num_joints), lengths)
+            if self.action is not None:
                 out.setdefault("action_features", []).append(feats)
                 out.setdefault("action_logits", []).append(logits)
         return {k: torch.cat(v).double().numpy() for k, v in out.items()}

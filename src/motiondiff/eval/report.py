@@ -24,6 +24,7 @@ Summary = dict[str, tuple[float, float, int]]
 
 Z_95 = 1.96  # two-sided 95% normal quantile, as in the paper
 MISSING = "–"  # en dash for a metric a method has no value for
+OPTIONAL = {"fid_train"}  # columns shown only when some row has them (FID against train: where train != the split)
 
 # protocol -> columns (metric key, header, direction); "→" means closer to Real is better, as in the MDM paper
 LAYOUTS: dict[str, list[tuple[str, str, str]]] = {
@@ -38,8 +39,9 @@ LAYOUTS: dict[str, list[tuple[str, str, str]]] = {
         ("action_accuracy", "Action acc. (label caption)", "↑"),  # labelled datasets with an action classifier
         ("action_accuracy_random", "Action acc. (random caption)", "↑"),
     ],
-    "action": [  # MDM Table 3 (action-to-motion)
+    "action": [  # MDM Table 3 (action-to-motion); Table 4 (UESTC) adds FID against the train clips
         ("fid", "FID", "↓"),
+        ("fid_train", "FID (train)", "↓"),  # optional
         ("accuracy", "Accuracy", "↑"),
         ("diversity", "Diversity", "→"),
         ("multimodality", "MultiModality", "→"),
@@ -108,7 +110,7 @@ def format_markdown(
     rows: dict[str, Summary], protocol: str, title: str | None = None, notes: list[str] | None = None
 ) -> str:
     """A Markdown table: a "Method" column, then the protocol's metric columns; one row per entry, order kept."""
-    layout = _layout(protocol)
+    layout = [c for c in _layout(protocol) if c[0] not in OPTIONAL or any(c[0] in r for r in rows.values())]
     header = ["Method"] + [f"{head} {arrow}" for _, head, arrow in layout]
     lines = []
     if title:

@@ -1,0 +1,67 @@
+"""`python evaluate.py evaluator=official official_dir=<MDM's layout>` runs end to end for KIT (text-motion
+evaluator), HumanAct12 (the real action-to-motion classifier on 24 joints) and UESTC (ST-GCN, FID against train and
+test), each on a tiny model trained by train.py on a fixture in the dataset's official layout."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from cli_helpers import TINY, run_cli, write_kit_layout
+from fixtures.official_layouts import write_official_action, write_official_t2m
+
+FAST_EVAL = ["replications=1", "mm_replications=0", "sampler=ddim", "steps=2", "wandb=false", "batch_size=16"]
+
+
+def _train(tmp_path, *overrides) -> str:
+    run_cli("train.py", *TINY, "trainer.max_steps=2", "checkpoint_every=2",
+            *overrides, env_dir=tmp_path)  # fmt: skip
+    return str(next((tmp_path / "outputs").glob("train/*/checkpoints/last.ckpt")))
+
+
+def _metrics(tmp_path) -> dict:
+    return json.loads(next((tmp_path / "outputs").glob("evaluate/*/metrics.json")).read_text())
+
+
+@pytest.mark.slow
+@pytest.mark.shared
+def test_kit_with_the_official_text_motion_evaluator(shared, tmp_path):
+    root = write_kit_layout(tmp_path / "KIT-ML")
+    official = tmp_path / "official"
+    write_official_t2m(official, shared("reference", "t2m_evaluator_state_dict_layout.txt").read_text(), "kit", 251)
+    ckpt = _train(tmp_path, "dataset=kit", f"dataset.root={root}")
+    run_cli("evaluate.py", f"checkpoint={ckpt}", "dataset=kit", f"dataset.root={root}", "evaluator=official",
+            f"official_dir={official}", *FAST_EVAL, env_dir=tmp_path)  # fmt: skip
+    summary = _metrics(tmp_path)
+    table = next((tmp_path / "outputs").glob("evaluate/*/table.md")).read_text()
+    assert "R-Precision top-3" in table and np.isfinite(summary["summary"]["fid"][0])
+
+
+@pytest.mark.slow
+@pytest.mark.shared
+@pytest.mark.parametrize("dataset", ["humanact12", "uestc"])
+def test_action_datasets_with_the_official_classifiers(shared, tmp_path, dataset):
+    from fixtures.action_layouts import write_humanact12_fixture, write_uestc_fixture
+
+    root = tmp_path / dataset
+    (write_humanact12_fixture if dataset == "humanact12" else write_uestc_fixture)(root)
+    official = tmp_path / "official"
+    write_official_action(official, shared("reference", "action-recognition"))
+    ckpt = _train(tmp_path, f"dataset={dataset}", f"dataset.root={root}", "condition=action")
+    run_cli("evaluate.py", f"checkpoint={ckpt}", f"dataset={dataset}", f"dataset.root={root}", "evaluator=official",
+            f"official_dir={official}", *FAST_EVAL, env_dir=tmp_path)  # fmt: skip
+    metrics = _metrics(tmp_path)["summary"]
+    for key in ("fid", "accuracy", "diversity"):
+        assert np.isfinite(metrics[key][0]), key
+    table = next((tmp_path / "outputs").glob("evaluate/*/table.md")).read_text()
+    # UESTC's test subjects are not its train subjects: MDM Table 4 reports FID against both. HumanAct12 trains on
+    # every clip and is evaluated against them, so there is one FID.
+    assert ("FID (train)" in table) == (dataset == "uestc") and ("fid_train" in metrics) == (dataset == "uestc")
+
+
+def test_official_without_a_folder_names_the_layout(text_ckpt, tmp_path):
+    proc = run_cli("evaluate.py", f"checkpoint={text_ckpt}", "evaluator=official", *FAST_EVAL, env_dir=tmp_path,
+                   check=False)  # fmt: skip
+    err = proc.stdout + proc.stderr
+    assert proc.returncode != 0 and "official_dir" in err and "finest.tar" in err and "Traceback" not in err
