@@ -1,16 +1,21 @@
-"""MDM's geometric losses (MDM §3 eq. 2–4, used by vvMDM too), for any representation.
+"""MDM's geometric losses (MDM §3 eq. 3-5, used by vvMDM too), for any representation.
 
 With x0 the clean motion, x̂0 the network's estimate of it (converted from ε or v when the network predicts those),
-both de-normalised, and FK = the representation's decode to joint positions (metres):
+FK = the representation's decode to joint positions (metres) of the de-normalised features, frames i = 1..N:
 
-    L_pos  = mean ‖FK(x0) − FK(x̂0)‖²
-    L_vel  = mean ‖(x0_{i+1} − x0_i) − (x̂0_{i+1} − x̂0_i)‖²          on the normalised features (L_simple's space)
-    L_foot = mean ‖(FK(x̂0)_{i+1} − FK(x̂0)_i) · f_i‖²                 f_i: ground-truth contacts of the feet joints
+    L_pos  = 1/N     Σ_i ‖FK(x0^i) − FK(x̂0^i)‖²                        (eq. 3)
+    L_foot = 1/(N−1) Σ_i ‖(FK(x̂0^{i+1}) − FK(x̂0^i)) · f_i‖²            (eq. 4)  f_i ∈ {0,1}^J: ground-truth contacts
+    L_vel  = 1/(N−1) Σ_i ‖(x0^{i+1} − x0^i) − (x̂0^{i+1} − x̂0^i)‖²      (eq. 5)  on the features the model predicts
     L = L_diffusion + λ_pos L_pos + λ_vel L_vel + λ_foot L_foot
+
+`reduction="equation"` (the paper presets): each norm runs over a whole frame (all joints and coordinates, or all
+features), the mean over frames only, as the equations are written. `reduction="mean"`: the mean over joints (or
+features) too, the convention of this project's earlier CPU experiments (1/J of eq. 3-4, 1/D of eq. 5).
 
 f_i is the representation's own contact rule unless ``contact_threshold`` is set: then a foot joint is in contact
 where its ground-truth displacement to the next frame is at most that many metres (MDM's code for its a2m data:
-‖p_{i+1} − p_i‖ ≤ 0.01 m per frame; HumanML3D's rule is about 0.045 m).
+‖p_{i+1} − p_i‖ ≤ 0.01 m per frame; HumanML3D's rule is about 0.045 m). Only the feet carry contacts, so the
+other joints' terms of eq. 4 are zero.
 
 Means run over valid frames only (frame pairs for the two velocity terms); each sample counts once in the batch.
 The geometric terms are not scaled by the diffusion loss weight w(t) (MDM adds them unweighted).
@@ -24,6 +29,8 @@ import torch
 
 from motiondiff.diffusion.process import masked_mean_per_sample
 
+REDUCTIONS = ("equation", "mean")
+
 
 @dataclass
 class GeometricLoss:
@@ -32,6 +39,11 @@ class GeometricLoss:
     lambda_vel: float = 1.0
     lambda_foot: float = 1.0
     contact_threshold: float | None = None  # metres per frame; None: the representation's rule
+    reduction: str = "equation"  # "equation": MDM eq. 3-5 (sum over a frame, mean over frames) | "mean"
+
+    def __post_init__(self):
+        if self.reduction not in REDUCTIONS:
+            raise ValueError(f"loss.reduction={self.reduction!r}: choose from {', '.join(REDUCTIONS)}")
 
     @property
     def active(self) -> bool:
@@ -51,7 +63,7 @@ class GeometricLoss:
         pair_mask = mask[:, 1:] & mask[:, :-1]
         if self.lambda_vel > 0:
             dv = (x0[:, 1:] - x0[:, :-1]) - (x0_hat[:, 1:] - x0_hat[:, :-1])
-            out["vel"] = masked_mean_per_sample(dv**2, pair_mask)
+            out["vel"] = masked_mean_per_sample(self._per_frame(dv**2), pair_mask)
         if self.lambda_pos > 0 or self.lambda_foot > 0:
             # FK in float32 even under bf16 autocast: positions integrate velocities over frames.
             with torch.autocast(device_type=x0.device.type, enabled=False):
@@ -61,14 +73,19 @@ class GeometricLoss:
                 with torch.no_grad():
                     pos = rep.decode(raw)
                 if self.lambda_pos > 0:
-                    out["pos"] = masked_mean_per_sample(((pos - pos_hat) ** 2).sum(-1), mask)
+                    out["pos"] = masked_mean_per_sample(self._per_frame(((pos - pos_hat) ** 2).sum(-1)), mask)
                 if self.lambda_foot > 0:
                     with torch.no_grad():
                         contacts = self.contacts(pos, raw)  # (B, N-1, F): contact at frame i
                     feet = pos_hat[:, :, list(rep.contact_joints)]
                     slide = ((feet[:, 1:] - feet[:, :-1]) ** 2).sum(-1) * contacts
-                    out["foot"] = masked_mean_per_sample(slide, pair_mask)
+                    out["foot"] = masked_mean_per_sample(self._per_frame(slide), pair_mask)
         return out
+
+    def _per_frame(self, values: torch.Tensor) -> torch.Tensor:
+        """(B, N, K) squared terms of each frame -> what is averaged over frames: their sum (the equations' norm
+        over the whole frame) or, with reduction="mean", the values themselves (averaged over K too)."""
+        return values.sum(-1) if self.reduction == "equation" else values
 
     def contacts(self, pos: torch.Tensor, raw: torch.Tensor) -> torch.Tensor:
         """(B, N-1, F) 0/1 ground-truth contacts of the contact joints at frames 0..N-2."""

@@ -222,3 +222,15 @@ def test_wrong_structure_is_one_clear_error(tmp_path):
         pickle.dump(vibe, f)
     with pytest.raises(ValueError, match=r"joints3d\[2\] has shape \(\d+, 24, 3\), expected \(\d+, 49, 3\)"):
         load_uestc(tmp_path / "u", "test")
+
+
+def test_unnormalised_action_data_for_the_mdm_presets(humanact12_root):
+    """normalise=False (MDM's a2m presets): the model sees the features as they are (mean 0, std 1)."""
+    from motiondiff.data.action_datamodules import HumanAct12DataModule
+
+    root, _ = humanact12_root
+    raw, normed = (HumanAct12DataModule(root, batch_size=4, normalise=flag) for flag in (False, True))
+    raw.setup("fit")
+    normed.setup("fit")
+    assert np.array_equal(raw.mean, np.zeros_like(normed.mean)) and np.array_equal(raw.std, np.ones_like(normed.std))
+    assert not np.allclose(normed.std, 1.0)  # the default does normalise

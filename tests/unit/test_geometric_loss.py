@@ -1,4 +1,4 @@
-"""MDM's geometric losses against their formulas (MDM eq. 2-4), on real clips, for every representation."""
+"""MDM's geometric losses against their equations (MDM eq. 3-5), by hand and on real clips for every representation."""
 
 from __future__ import annotations
 
@@ -32,23 +32,57 @@ def test_zero_when_prediction_is_exact(batch):
     assert 0.0 <= float(terms["foot"]) < 1e-3
 
 
-def test_terms_match_the_formulas(batch):
+@pytest.mark.parametrize("reduction", ["equation", "mean"])
+def test_terms_match_the_formulas(batch, reduction):
     rep, x0, mask, mean, std = batch
     x_hat = x0 + 0.05 * torch.randn(x0.shape, generator=torch.Generator().manual_seed(0), dtype=x0.dtype)
-    terms = GeometricLoss(rep).terms(x_hat, x0, mask, mean, std)
+    terms = GeometricLoss(rep, reduction=reduction).terms(x_hat, x0, mask, mean, std)
     p, p_hat = rep.decode(x0 * std + mean), rep.decode(x_hat * std + mean)
     contacts = rep.foot_contacts(x0 * std + mean)
     for i in range(x0.shape[0]):
         n = int(mask[i].sum())
-        want_pos = ((p[i, :n] - p_hat[i, :n]) ** 2).sum(-1).mean()  # mean over frames and joints of ‖Δp‖²
         dv = (x0[i, 1:n] - x0[i, : n - 1]) - (x_hat[i, 1:n] - x_hat[i, : n - 1])
-        want_vel = (dv**2).mean()
         feet = p_hat[i, :n, list(rep.contact_joints)]
-        want_foot = (((feet[1:] - feet[:-1]) ** 2).sum(-1) * contacts[i, : n - 1]).mean()
+        slide = ((feet[1:] - feet[:-1]) ** 2).sum(-1) * contacts[i, : n - 1]
+        if reduction == "equation":  # eq. 3-5: squared norm of the whole frame, mean over frames
+            want_pos = ((p[i, :n] - p_hat[i, :n]) ** 2).sum((-1, -2)).mean()
+            want_vel, want_foot = (dv**2).sum(-1).mean(), slide.sum(-1).mean()
+        else:  # also averaged over joints / features
+            want_pos = ((p[i, :n] - p_hat[i, :n]) ** 2).sum(-1).mean()
+            want_vel, want_foot = (dv**2).mean(), slide.mean()
         torch.testing.assert_close(terms["pos"][i], want_pos)
         torch.testing.assert_close(terms["vel"][i], want_vel)
         torch.testing.assert_close(terms["foot"][i], want_foot)
     assert float(terms["pos"].min()) > 0
+
+
+def test_equations_by_hand():
+    """MDM eq. 3-5 on a 3-frame motion of joint positions (FK = identity), numbers worked out on paper:
+    x0 stands still at 0; x̂0 moves joint 5 by (0.3, 0, 0.4) at frame 1 only and the left foot by 0.2 m in z at
+    frame 2. Contacts (rule: <= 1 cm per frame): every foot joint of x0, at every frame.
+      L_pos  = (0 + (0.3² + 0.4² + 0) + 0.2²) / 3 = (0.25 + 0.04) / 3
+      L_vel  = (‖(0.3, 0.4) and the left foot still‖² + ‖−(0.3, 0.4) and +0.2‖²) / 2 = (0.25 + 0.29) / 2
+      L_foot = (0 + 0.2²) / 2 (only the moved foot slides)"""
+    from motiondiff.data.representations import get_representation
+    from motiondiff.skeleton import SMPL22
+
+    rep = get_representation("jp", SMPL22)
+    x0 = torch.zeros(1, 3, 66, dtype=torch.float64)
+    x_hat = x0.clone()
+    x_hat[0, 1, 3 * 5] = 0.3
+    x_hat[0, 1, 3 * 5 + 2] = 0.4
+    foot = rep.contact_joints[1]
+    x_hat[0, 2, 3 * foot + 2] = 0.2
+    mask = torch.ones(1, 3, dtype=torch.bool)
+    zero, one = torch.zeros(66, dtype=torch.float64), torch.ones(66, dtype=torch.float64)
+    terms = GeometricLoss(rep, contact_threshold=0.01).terms(x_hat, x0, mask, zero, one)
+    assert float(terms["pos"]) == pytest.approx((0.25 + 0.04) / 3)
+    assert float(terms["vel"]) == pytest.approx((0.25 + 0.29) / 2)
+    assert float(terms["foot"]) == pytest.approx(0.04 / 2)
+    mean_terms = GeometricLoss(rep, contact_threshold=0.01, reduction="mean").terms(x_hat, x0, mask, zero, one)
+    assert float(mean_terms["pos"]) == pytest.approx((0.25 + 0.04) / 3 / 22)  # the old convention: 1/J of eq. 3
+    with pytest.raises(ValueError, match="reduction"):
+        GeometricLoss(rep, reduction="sum")
 
 
 def test_padding_and_weights(batch):

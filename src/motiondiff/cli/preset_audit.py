@@ -55,6 +55,8 @@ def paper_settings(preset: str) -> dict[str, tuple[object, str]]:
         rows["model.num_layers"] = (8, VVMDM)
         geo = (0.0, 0.0, 0.0) if preset.endswith("no_geometric") else (1.0, 1.0, 1.0)
         rows.update({f"loss.lambda_{k}": (v, "vvMDM Tab. 3") for k, v in zip(("pos", "vel", "foot"), geo, strict=True)})
+        if any(geo):
+            rows["loss.reduction"] = ("equation", "vvMDM §3: MDM's geometric losses (MDM eq. 3-5)")
         return rows
     rows["diffusion.prediction"] = ("x0", MDM)
     if preset.startswith(("mdm_humanml3d", "mdm_kit")):
@@ -85,6 +87,8 @@ def paper_settings(preset: str) -> dict[str, tuple[object, str]]:
     rows["condition.drop_prob"] = (0.0, MDM_A2M)
     rows["model.sample_guidance"] = (1.0, MDM_A2M)
     rows["loss.contact_threshold"] = (0.01, "MDM's code for a2m: foot contact where ‖Δp‖ ≤ 0.01 m per frame")
+    rows["loss.reduction"] = ("equation", "MDM eq. 3-5: norm over a whole frame, mean over frames")
+    rows["dataset.datamodule.normalise"] = (False, "MDM's a2m data loaders: features not normalised")
     geo = next((v for k, v in GEOMETRIC.items() if preset.endswith(k)), (1.0, 1.0, 1.0))
     rows.update({f"loss.lambda_{k}": (v, "MDM Tab. 3/7") for k, v in zip(("pos", "vel", "foot"), geo, strict=True)})
     return rows

@@ -8,35 +8,42 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from motiondiff.data.clip import ClipSplit
 from motiondiff.data.datamodules import ClipDataModule
 from motiondiff.data.humanact12 import load_humanact12
 from motiondiff.data.uestc import load_uestc
 
 
-class HumanAct12DataModule(ClipDataModule):
-    """`<root>/humanact12poses.pkl` (ACTOR's HumanAct12Poses); see motiondiff.data.humanact12 for the layout."""
+class _ActionClipDataModule(ClipDataModule):
+    """`normalise=False` feeds the features as they are (mean 0, std 1): MDM's a2m data are not normalised, so its
+    presets train on raw 6D rotations and metres, where the geometric losses' λ = 1 has the paper's meaning."""
 
     default_representation = "rp6jr"
 
     def __init__(self, root: str | Path, batch_size: int = 64, num_workers: int = 0, max_frames: int = 60,
-                 min_frames: int = 16, seed: int = 0, representation: str | None = None):  # fmt: skip
+                 min_frames: int = 16, seed: int = 0, representation: str | None = None, normalise: bool = True):  # fmt: skip
         super().__init__(batch_size, num_workers, max_frames, min_frames, 1, seed, representation)
         self.root = Path(root)
+        self.normalise = bool(normalise)
+
+    def statistics(self) -> tuple[np.ndarray, np.ndarray]:
+        mean, std = super().statistics()
+        if self.normalise:
+            return mean, std
+        return np.zeros_like(mean), np.ones_like(std)
+
+
+class HumanAct12DataModule(_ActionClipDataModule):
+    """`<root>/humanact12poses.pkl` (ACTOR's HumanAct12Poses); see motiondiff.data.humanact12 for the layout."""
 
     def load_clips(self, split: str) -> ClipSplit:
         return load_humanact12(self.root, split)
 
 
-class UESTCDataModule(ClipDataModule):
+class UESTCDataModule(_ActionClipDataModule):
     """`<root>/vibe_cache_refined.pkl` + `<root>/info/` (ACTOR's UESTC); cross-subject split as ACTOR reads it."""
-
-    default_representation = "rp6jr"
-
-    def __init__(self, root: str | Path, batch_size: int = 64, num_workers: int = 0, max_frames: int = 60,
-                 min_frames: int = 16, seed: int = 0, representation: str | None = None):  # fmt: skip
-        super().__init__(batch_size, num_workers, max_frames, min_frames, 1, seed, representation)
-        self.root = Path(root)
 
     def load_clips(self, split: str) -> ClipSplit:
         return load_uestc(self.root, split, num_frames=self.max_frames)

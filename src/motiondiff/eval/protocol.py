@@ -40,7 +40,9 @@ class EvalClips:
     features: list[np.ndarray]  # (N_i, D) de-normalised
     captions: list[list[str]]
     actions: np.ndarray  # (C,) label ids, -1 = none
-    tokens: dict[str, list[str]] = field(default_factory=dict)  # caption -> its "word/POS" tokens, where the data has them
+    tokens: dict[str, list[str]] = field(
+        default_factory=dict
+    )  # caption -> its "word/POS" tokens, where the data has them
 
     @classmethod
     def from_dataset(cls, ds: MotionDataset, max_clips: int | None = None, seed: int = 0) -> EvalClips:

@@ -74,8 +74,9 @@ class MotionDiffusionModule(L.LightningModule):
         # How features decode to joints (None: HumanML3D features, as checkpoints from before representations).
         self.representation = representation_from_spec(representation, feature_dim)
         lambdas = {k: float(v) for k, v in (loss or {}).items() if k.startswith("lambda_")}
-        threshold = (loss or {}).get("contact_threshold")
-        self.geometric = GeometricLoss(self.representation, **lambdas, contact_threshold=threshold) if lambdas else None
+        threshold, reduction = (loss or {}).get("contact_threshold"), (loss or {}).get("reduction") or "mean"
+        self.geometric = (GeometricLoss(self.representation, **lambdas, contact_threshold=threshold,
+                                        reduction=reduction) if lambdas else None)  # fmt: skip
         if self.geometric is not None and not self.geometric.active:
             self.geometric = None
         # Safe x̂0 (guided-diffusion's clip_denoised, with the training data's per-feature range in place of images'
