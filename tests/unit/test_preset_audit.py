@@ -36,3 +36,19 @@ def test_a_drifted_setting_is_caught(preset, override, key):
 def test_the_committed_audit_table_is_current():
     committed = (REPO_DIR / "docs" / "presets_audit.md").read_text()
     assert committed == markdown(PRESETS), "regenerate it: python -m motiondiff.cli.preset_audit"
+
+
+def test_paper_unet_has_about_the_papers_parameter_count():
+    """MDM Table 1 gives the U-Net 23.47 M parameters (no layout): the preset's denoiser, CLIP excluded, is within 5%."""
+    from fixtures.tiny_models import tiny_datamodule
+    from hydra import compose, initialize_config_dir
+
+    from motiondiff.cli.train import build_module
+
+    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
+        cfg = compose("train", overrides=["experiment=mdm_humanml3d_tab1_unet", "text_encoder=minilm"])
+    denoiser = build_module(cfg, tiny_datamodule()).denoiser
+    clip_width_extra = (512 - cfg.text_encoder.dim) * cfg.model.d_model  # CLIP's 512-d features in the projection
+    params = sum(p.numel() for p in denoiser.parameters()) + clip_width_extra
+    print(f"\npaper U-Net preset: {params / 1e6:.2f} M parameters (MDM: 23.47 M)")
+    assert abs(params / 23.47e6 - 1) < 0.05
