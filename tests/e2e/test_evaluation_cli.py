@@ -81,3 +81,20 @@ def test_evaluation_off_alone_trains_without_a_best_fid_checkpoint(tmp_path):
     run = next((tmp_path / "outputs").glob("train/*"))
     assert (run / "checkpoints" / "last.ckpt").is_file() and not list(run.glob("checkpoints/best-fid-*"))
     assert "no best-FID checkpoint either" in proc.stdout + proc.stderr
+
+
+@pytest.mark.slow
+def test_unconstrained_jp_model_with_smoothing_reports_its_own_feature_smoothness(tmp_path):
+    """vvMDM's setting on the embedded data: an unconditioned jp model, the Gaussian filter in evaluation and the
+    smoothness of its own (joint-position) features beside the HumanML3D-bridge one."""
+    run_cli("train.py", *TINY, "condition=none", "representation=jp", "trainer.max_steps=2", "checkpoint_every=2",
+            env_dir=tmp_path)  # fmt: skip
+    ckpt = next((tmp_path / "outputs").glob("train/*/checkpoints/last.ckpt"))
+    run_cli("evaluate.py", f"checkpoint={ckpt}", "replications=1", "mm_replications=0", "steps=2", "wandb=false",
+            "smooth_sigma=2", env_dir=tmp_path)  # fmt: skip
+    run = next((tmp_path / "outputs").glob("evaluate/*"))
+    metrics = json.loads((run / "metrics.json").read_text())
+    assert metrics["smooth_sigma"] == 2 and "smoothness_own" in metrics["summary"]
+    assert (
+        0 < metrics["real"]["smoothness_own"][0] <= 1 and "Smoothness (own features)" in (run / "table.md").read_text()
+    )

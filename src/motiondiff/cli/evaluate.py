@@ -23,6 +23,7 @@ from tqdm import tqdm
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps, to_dict
 from motiondiff.cli.sample import smoothing_sigma
 from motiondiff.cli.validate import RULES_EVALUATE, check
+from motiondiff.edit.smoothing import SMOOTHABLE
 from motiondiff.eval import action_table, official, report
 from motiondiff.eval import metrics as M
 from motiondiff.eval.protocol import (
@@ -57,8 +58,9 @@ def _check(cfg: DictConfig, module) -> tuple[float, int | None, float | None]:
     sigma = smoothing_sigma(cfg, module)  # sample.py's rule: 0 off, null the model's default
     apply_clip_x0(cfg, module)
     layout = (module.hparams.get("representation") or {}).get("name", "hml263")
-    if sigma and layout not in ("hml263", "kit251"):
-        raise UsageError(f"smooth_sigma needs a model of HumanML3D/KIT features; this one generates {layout}")
+    if sigma and layout not in SMOOTHABLE:
+        raise UsageError(f"smooth_sigma needs a model of {'/'.join(SMOOTHABLE)} features (vvMDM filters positions); "
+                         f"this one generates {layout}: evaluate with smooth_sigma=0")  # fmt: skip
     return guidance, steps, sigma
 
 
@@ -95,6 +97,7 @@ def evaluate(
                 "precision": cfg.precision, "smooth_sigma": sigma}  # fmt: skip
     common = {"diversity_pairs": cfg.diversity_pairs, "pool_size": cfg.pool_size, "knn_k": cfg.knn_k}
     reps: dict[str, list[dict]] = {"Real": [], "Model": []}
+    own = kind == "none" and evaluators.bridge is not None  # vvMDM Fig. 2: smoothness of the model's own features too
     timings = {"generation_s": 0.0, "motions": 0}
     mm_n = min(cfg.mm_conditions, len(test))
     with_action = bool(cfg.action_accuracy) and evaluators.measures_action(kind, test)
@@ -112,6 +115,7 @@ def evaluate(
             text = evaluators.embed_text(captions) if kind == "text" else None
             reps["Real"].append(replication_metrics(kind, evaluators, real_train, real_test, text=text,
                                                     actions=test.actions, generated_features=evaluators.as_hml(test.features),
+                                                    own_features=test.features if own else None,
                                                     seed=seed, **common))  # fmt: skip
             generator = torch.Generator(device=module.device).manual_seed(seed)
             start = time.perf_counter()
@@ -122,6 +126,7 @@ def evaluate(
             generated = evaluators.embed_motion(feats)
             values = replication_metrics(kind, evaluators, real_test, generated, text=text,
                                          actions=test.actions, generated_features=evaluators.as_hml(feats), seed=seed,
+                                         own_features=feats if own else None,
                                          **common)  # fmt: skip
             if kind == "action" and set(train.ids) != set(test.ids):  # MDM Tab. 4 (UESTC): FID against train too
                 key = evaluators.fid_features(kind)

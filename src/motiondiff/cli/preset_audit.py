@@ -73,7 +73,10 @@ def paper_settings(preset: str) -> dict[str, tuple[object, str]]:
         rows["backbone.name"] = (name, "MDM Tab. 1")
         rows["model.num_layers"] = (8, MDM)
         if name == "unet":
-            rows["backbone.blocks_per_level"] = (1, "MDM Tab. 1: 23.47 M parameters (layout unpublished; this gives 24.16 M)")
+            rows["backbone.blocks_per_level"] = (
+                1,
+                "MDM Tab. 1: 23.47 M parameters (layout unpublished; this gives 24.16 M)",
+            )
         if name == "gru":
             rows["backbone.num_layers"] = (2, "MDM §5: GRU best with 2 layers")
         if name == "trans_dec":

@@ -55,13 +55,23 @@ def smoothness_of_joints(joints: np.ndarray, skeleton: Skeleton, alpha: float = 
     return smoothness(feats, alpha)
 
 
-def smooth_features(features: np.ndarray, sigma: float | None) -> np.ndarray:
-    """HumanML3D features (T, D) of one motion with its joints smoothed (``smooth_joints``) and re-encoded, the same
-    T rows (the last frame is repeated once, as the encoding drops one); None or 0 returns a copy. Evaluation
-    applies the filter here so that the metrics see the motion sample.py saves with the same ``smooth_sigma``."""
+SMOOTHABLE = ("hml263", "kit251", "jp")  # layouts whose features give joint positions back without IK
+
+
+def smooth_features(features: np.ndarray, sigma: float | None, layout: str = "hml263") -> np.ndarray:
+    """Features (T, D) of one motion with its joints smoothed (``smooth_joints``): HumanML3D features are decoded,
+    filtered and re-encoded (the same T rows; the last frame is repeated once, as the encoding drops one); `jp`
+    features are joint positions, filtered as they are. None or 0 returns a copy. Evaluation applies the filter
+    here so that the metrics see the motion sample.py saves with the same ``smooth_sigma``. Rotation layouts are
+    refused: averaging rotation components is not a rotation average, and positions cannot be re-encoded as
+    rotations without inverse kinematics."""
     features = np.asarray(features)
     if sigma is None or sigma == 0 or len(features) < 2:
         return features.copy()
+    if layout not in SMOOTHABLE:
+        raise ValueError(f"temporal smoothing of {layout} features is not defined here; use one of {SMOOTHABLE}")
+    if layout == "jp":
+        return smooth_joints(features.reshape(len(features), -1, 3), sigma).reshape(features.shape)
     joints = smooth_joints(joints_from_features(features), sigma)
     joints = np.concatenate([joints, joints[-1:]], axis=0)
     return features_from_joints(joints, skeleton_for_dim(features.shape[-1])).astype(features.dtype)

@@ -192,6 +192,7 @@ def replication_metrics(
     text: np.ndarray | None = None,
     actions: np.ndarray | None = None,
     generated_features: list[np.ndarray] | None = None,
+    own_features: list[np.ndarray] | None = None,
     diversity_pairs: int = 300,
     pool_size: int = 32,
     knn_k: int = 3,
@@ -216,6 +217,8 @@ def replication_metrics(
         out.update(M.knn_precision_recall(real_f, gen_f, k=knn_k))
     if generated_features is not None:
         out["smoothness"] = float(np.mean([M.smoothness(f, smoothness_alpha) for f in generated_features]))
+    if own_features is not None:  # vvMDM Fig. 2: on the representation's own features, not the HumanML3D bridge
+        out["smoothness_own"] = float(np.mean([M.smoothness(f, smoothness_alpha) for f in own_features]))
     return out
 
 
@@ -252,11 +255,12 @@ def generate(
     `sampling`: guidance, sampler, steps, eta (see MotionDiffusionModule.sample). `precision="bf16-mixed"` runs
     the denoiser under bf16 autocast, as it was trained by default (~2.7x faster on this project's CPU); any other
     Lightning precision string samples in full precision. `smooth_sigma` > 0 applies vvMDM's temporal filter to the
-    decoded joints of every motion (HumanML3D features only; ``edit.smoothing.smooth_features``)."""
+    decoded joints of every motion (HumanML3D or jp features; ``edit.smoothing.smooth_features``)."""
     from motiondiff.cli.sample import condition_batch
     from motiondiff.edit.smoothing import smooth_features
 
     bf16 = str(precision).startswith("bf16")
+    layout = getattr(getattr(module, "representation", None), "name", "hml263")
 
     out: list[np.ndarray] = []
     order = torch.argsort(lengths, descending=True)  # similar lengths per batch: less padding to compute
@@ -269,7 +273,7 @@ def generate(
             feats = module.sample(cond, lens, generator=generator, **sampling)
         feats = module.denormalise(feats.float()).cpu().numpy()
         for row, i in enumerate(idx):
-            results[i] = smooth_features(feats[row, : int(lengths[i])], smooth_sigma)
+            results[i] = smooth_features(feats[row, : int(lengths[i])], smooth_sigma, layout)
         if progress is not None:
             progress.update(len(idx))
     out = [results[i] for i in range(len(conditions))]

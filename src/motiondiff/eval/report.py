@@ -24,7 +24,9 @@ Summary = dict[str, tuple[float, float, int]]
 
 Z_95 = 1.96  # two-sided 95% normal quantile, as in the paper
 MISSING = "–"  # en dash for a metric a method has no value for
-OPTIONAL = {"fid_train"}  # columns shown only when some row has them (FID against train: where train != the split)
+# columns shown only when some row has them: FID against train (where train != the split), smoothness of a
+# representation's own features (vvMDM Fig. 2; models not on HumanML3D features)
+OPTIONAL = {"fid_train", "smoothness_own"}
 
 # protocol -> columns (metric key, header, direction); "→" means closer to Real is better, as in the MDM paper
 LAYOUTS: dict[str, list[tuple[str, str, str]]] = {
@@ -53,6 +55,7 @@ LAYOUTS: dict[str, list[tuple[str, str, str]]] = {
         ("recall", "Recall", "↑"),
         ("diversity", "Diversity", "→"),
         ("smoothness", "Smoothness", "↑"),
+        ("smoothness_own", "Smoothness (own features)", "↑"),  # optional: representations other than HumanML3D's
     ],
 }
 
