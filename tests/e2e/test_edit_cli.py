@@ -90,7 +90,8 @@ def test_inbetween_a_long_shared_bandai_bvh(text_ckpt, tmp_path, shared):
 
 def test_body_part_editing_keeps_the_lower_body(text_ckpt, tmp_path):
     out, res = _edit(tmp_path, text_ckpt, f"input={CLIP_ID}", "kind=parts", "parts=lower_body", "mode=repaint",
-                     "text=a person raises both hands")  # fmt: skip
+                     "text=a person raises both hands", "clip_x0=static")  # fmt: skip
+    assert res["settings"]["clip_x0"] == "static"  # safe x̂0 is a switch of edit.py too
     lower, upper = list(SMPL22.parts["lower_body"]), list(SMPL22.parts["upper_body"])
     assert res["settings"]["kept_joints"] == [SMPL22.joint_names[j] for j in lower]
     for row in res["samples"]:

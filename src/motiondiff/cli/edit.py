@@ -10,7 +10,7 @@ import numpy as np
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.cli.common import UsageError, find_checkpoint, sampling_steps
+from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps
 from motiondiff.cli.sample import check_text, export_formats, load_module, slug
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
@@ -72,6 +72,7 @@ def _check(cfg: DictConfig, module) -> int | None:
         raise UsageError(f"unknown kind {cfg.kind!r}; choose from {', '.join(KINDS)}")
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
+    apply_clip_x0(cfg, module)
     return sampling_steps(cfg, module)
 
 
@@ -113,7 +114,7 @@ def run(cfg: DictConfig) -> Path:
                   "captions": motion.captions, "window": list(motion.window), "total_frames": motion.total_frames},
         "condition": condition,
         "representation": module.representation.name,
-        "settings": result.settings,
+        "settings": {**result.settings, "clip_x0": module.clip_rule},
         "samples": rows,
     }  # fmt: skip
     (out / "results.json").write_text(json.dumps(summary, indent=1))
