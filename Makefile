@@ -12,7 +12,7 @@ export HF_HOME := $(CURDIR)/.cache/huggingface
 export HF_HUB_OFFLINE := 1
 export TRANSFORMERS_OFFLINE := 1
 
-.PHONY: setup train test bench lint format data data-full lock clean
+.PHONY: setup train test bench lint format data data-full lock clean guided-compare
 
 # Training and the benchmark run with tcmalloc where it is installed (`make allocator` installs Debian's as root):
 # glibc returns every freed tensor above 32 MB to the kernel and page-faults it back in on the next step, which made
@@ -67,6 +67,31 @@ allocator:
 # bench/results/latest.{json,md}. Run it on an otherwise idle machine: other work skews every row.
 bench: setup allocator
 	$(WITH_TCMALLOC) $(PY) bench/run.py
+
+# GuidedMotion against MDM on the complex-motion split (docs/results/guidedmotion), every stage timed in its run.json:
+# the three motion VAEs and the latent stage with the CPU recipe, then MDM for the same total wall time, then the
+# comparison, the Tab. 4 ablation and sampling times. About 3 h of 2-core CPU; a finished stage is not run again.
+GC ?= outputs/guided_compare
+GC_VAE_STEPS ?= 960
+GC_LATENT_STEPS ?= 5000
+GC_REPLICATIONS ?= 5
+GC_OUT ?= docs/results/guidedmotion/comparison_scaled_linear
+COMP := dataset=bandai_mini_compositional
+guided-compare: setup allocator
+	@for level in motion action specific; do test -f $(GC)/vae_$$level/checkpoints/last.ckpt || \
+		$(WITH_TCMALLOC) $(PY) train_vae.py level=$$level $(COMP) batch_size=16 optim.lr=5e-4 \
+			trainer.max_steps=$(GC_VAE_STEPS) trainer.check_val_every_n_epoch=5 checkpoint_every=240 \
+			hydra.run.dir=$(GC)/vae_$$level || exit 1; done
+	test -f $(GC)/latent/checkpoints/last.ckpt || $(WITH_TCMALLOC) $(PY) train_latent.py \
+		vae.motion=$(GC)/vae_motion/checkpoints/last.ckpt vae.action=$(GC)/vae_action/checkpoints/last.ckpt \
+		vae.specific=$(GC)/vae_specific/checkpoints/last.ckpt batch_size=32 optim.lr=2e-4 optim.schedule=cosine \
+		optim.warmup_steps=200 trainer.max_steps=$(GC_LATENT_STEPS) hydra.run.dir=$(GC)/latent
+	test -f $(GC)/mdm/checkpoints/last.ckpt || $(WITH_TCMALLOC) $(PY) train.py $(COMP) trainer.max_steps=-1 \
+		"+trainer.max_time={seconds: $$($(PY) -c 'import json,sys; print(int(sum(json.load(open(f"$(GC)/{s}/run.json"))["train_seconds"] for s in sys.argv[1:])))' vae_motion vae_action vae_specific latent)}" \
+		hydra.run.dir=$(GC)/mdm
+	mdm=$$(ls $(GC)/mdm/checkpoints/best-fid-*.ckpt 2>/dev/null | head -1); \
+	$(PY) -m motiondiff.eval.guided_compare latent=$(GC)/latent/checkpoints/last.ckpt \
+		mdm=$${mdm:-$(GC)/mdm/checkpoints/last.ckpt} replications=$(GC_REPLICATIONS) out=$(GC_OUT)
 
 lint: setup
 	$(VENV)/bin/ruff check src tests bench
