@@ -11,8 +11,10 @@ quiet_tool_caches()
 @hydra.main(version_base="1.3", config_path="conf", config_name="sample")
 @user_errors
 def main(cfg):
-    from motiondiff.cli.sample import run
-
+    if cfg.get("method", "mdm") == "guidedmotion":
+        from motiondiff.cli.sample_guided import run
+    else:
+        from motiondiff.cli.sample import run
     run(cfg)
 
 

@@ -14,7 +14,7 @@ FAST_EVAL = ["callbacks.evaluation.num_clips=12", "callbacks.evaluation.steps=4"
 
 pytestmark = pytest.mark.skipif(
     not (EVALUATORS / "text_motion.safetensors").is_file(),
-    reason=f"no shipped evaluators in {EVALUATORS}: rebuild them with python -m motiondiff.eval.train_evaluator",
+    reason=f"no shipped evaluators in {EVALUATORS}: rebuild them with python -m motiondiff.cli.train_evaluator",
 )
 
 

@@ -17,7 +17,7 @@ ON_EMBEDDED_DATA = ["experiment=mdm_humanml3d_tab6_t10", "dataset=bandai_mini", 
 
 pytestmark = pytest.mark.skipif(
     not (EVALUATORS / "text_motion.safetensors").is_file(),
-    reason=f"no shipped evaluators in {EVALUATORS}: rebuild them with python -m motiondiff.eval.train_evaluator",
+    reason=f"no shipped evaluators in {EVALUATORS}: rebuild them with python -m motiondiff.cli.train_evaluator",
 )
 
 

@@ -127,3 +127,17 @@ def test_weight_control_report_measures_latent_and_decoded_distances(latent_ckpt
     rows = result["captions"][0]["rows"]  # the weight changes what is sampled from the same noise
     assert rows[0]["latent_distance"] != rows[1]["latent_distance"]
     assert out.with_suffix(".png").stat().st_size > 0 and "evaluator distance" in out.with_suffix(".md").read_text()
+
+
+def test_guided_pipeline_from_python(latent_ckpt):
+    """The same sampling through GuidedMotionPipeline, the Python API."""
+    from motiondiff.errors import UsageError
+    from motiondiff.pipelines import GuidedMotionPipeline
+
+    _, ckpt = latent_ckpt
+    pipe = GuidedMotionPipeline.from_pretrained(ckpt, local_model="text")
+    out = pipe(CAPTION, seconds=3, num_samples=2, level_steps=(3, 3, 4), local_weights=[2, 0.5])
+    assert len(out) == 2 and out.joints[0].shape == (60, 22, 3) and np.isfinite(out.joints[0]).all()
+    assert [a["weight"] for a in out.info["local_actions"]] == [2.0, 0.5]
+    with pytest.raises(UsageError, match="one per action"):
+        pipe(CAPTION, local_weights=[1.0])

@@ -18,7 +18,7 @@ FOLDER = REPO_DIR / "checkpoints" / "evaluators" / "bandai_mini"
 @pytest.fixture(scope="module")
 def setup():
     if not (FOLDER / "text_motion.safetensors").is_file():
-        pytest.skip(f"no shipped evaluators in {FOLDER}: python -m motiondiff.eval.train_evaluator")
+        pytest.skip(f"no shipped evaluators in {FOLDER}: python -m motiondiff.cli.train_evaluator")
     dm = PreparedDataModule(embedded_data_root(), max_frames=80)
     dm.setup(None)
     return Evaluators.load(FOLDER), dm
@@ -59,7 +59,7 @@ def test_full_bandai_evaluators_recognise_the_embedded_clips():
     checks recorded beside the training provenance."""
     folder = REPO_DIR / "checkpoints" / "evaluators" / "bandai"
     if not (folder / "action.safetensors").is_file():
-        pytest.skip(f"no evaluators in {folder}: python -m motiondiff.eval.train_evaluator dataset=bandai")
+        pytest.skip(f"no evaluators in {folder}: python -m motiondiff.cli.train_evaluator dataset=bandai")
     evaluators = Evaluators.load(folder)
     names = evaluators.action_names
     assert len(names) == 24 and "kick" in names

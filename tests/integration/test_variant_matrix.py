@@ -14,9 +14,9 @@ import torch
 from hydra import compose, initialize_config_dir
 
 from motiondiff.cli.common import REPO_DIR, register_resolvers
-from motiondiff.cli.sample import condition_batch
 from motiondiff.cli.train import build_module
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
+from motiondiff.lit.conditions import condition_batch
 
 register_resolvers()
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import torch
 from fixtures.tiny_models import tiny_datamodule, tiny_module
 
-from motiondiff.cli.sample import condition_batch
+from motiondiff.lit.conditions import condition_batch
 from motiondiff.text.cache import TextEmbeddingCache
 from motiondiff.text.encoders import MiniLMEncoder
 

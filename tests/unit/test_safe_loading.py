@@ -45,7 +45,7 @@ def test_a_plain_unpickler_would_run_the_payload(crafted):
 
 
 def test_sampling_loader_refuses_a_crafted_checkpoint(crafted):
-    from motiondiff.cli.sample import load_module
+    from motiondiff.lit.loading import load_model as load_module
 
     _refused(load_module, *crafted)
 

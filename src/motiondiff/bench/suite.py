@@ -33,7 +33,7 @@ def default_sampler() -> tuple[str, int | None]:
     """sample.py's default sampler and steps (conf/sample.yaml's defaults)."""
     from hydra import compose, initialize_config_dir
 
-    from motiondiff.cli.common import REPO_DIR
+    from motiondiff.paths import REPO_DIR
 
     with initialize_config_dir(str(REPO_DIR / "conf"), version_base="1.3"):
         cfg = compose("sample")
@@ -80,8 +80,9 @@ def compile_rows(s: Suite, quick: bool) -> None:
 
 
 def run_suite(quick: bool = False, model: str = "shipped", command: str = "", compile: bool = False) -> dict:
-    from motiondiff.cli.common import REPO_DIR, find_checkpoint, text_encoder_kwargs
-    from motiondiff.cli.sample import load_module
+    from motiondiff.lit.conditions import text_encoder_kwargs
+    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.paths import REPO_DIR, find_checkpoint
 
     start = time.perf_counter()
     s = Suite(quick)

@@ -98,8 +98,8 @@ def sampling(module, count: int, frames: int, sampler: str, steps: int | None, g
     """``count`` motions of ``frames`` frames from PROMPT. Returns (run, steps_total, steps_run): when ``timed_steps``
     is below the chain's length the run stops after that many steps (the caller scales the time: every step of a
     chain costs the same forward), so DDPM-1000 at batch 32 fits the bench's time budget."""
-    from motiondiff.cli.sample import condition_batch
     from motiondiff.diffusion.samplers import select_timesteps
+    from motiondiff.lit.conditions import condition_batch
 
     cond = condition_batch(module, [PROMPT] * count)  # encoded once, then cached: not part of the timing
     lengths = torch.full((count,), frames)

@@ -1,64 +1,22 @@
-"""Shared CLI plumbing: config resolvers, user-error reporting, finding checkpoints."""
+"""Shared CLI plumbing: the trainer's loggers and callbacks, the sampling settings every command checks the same way.
+The helpers every entry point needs live below the CLI (motiondiff.scripting, .paths, .errors) and are re-exported."""
 
 from __future__ import annotations
 
-import functools
 import logging
-import os
-import sys
-from pathlib import Path
 
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 
-REPO_DIR = Path(__file__).resolve().parents[3]
-# checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
-SHIPPED_MODELS = {
-    "text": REPO_DIR / "checkpoints" / "models" / "bandai_mini_text_cpu.safetensors",
-    "action": REPO_DIR / "checkpoints" / "models" / "bandai_action_cpu.safetensors",
-}
-SHIPPED_MODEL = SHIPPED_MODELS["text"]
-RELEASE_SUFFIXES = (".safetensors", ".json")
-
-
-class UsageError(ValueError):
-    """A mistake the user can fix (bad prompt, length, name, path); printed as one line, exit code 2."""
-
-
-def register_resolvers() -> None:
-    if not OmegaConf.has_resolver("repo_dir"):
-        OmegaConf.register_new_resolver("repo_dir", lambda: str(REPO_DIR))
-    if not OmegaConf.has_resolver("fast_cpu_precision"):
-        from motiondiff.hardware import fast_cpu_precision
-
-        OmegaConf.register_new_resolver("fast_cpu_precision", fast_cpu_precision)
-
-
-def quiet_tool_caches() -> None:
-    """Offline defaults and project-local caches for W&B, matplotlib and Hugging Face (never the user's home)."""
-    cache = Path(os.environ.get("MOTIONDIFF_CACHE_DIR", REPO_DIR / ".cache" / "motiondiff"))
-    os.environ.setdefault("WANDB_MODE", "offline")
-    os.environ.setdefault("WANDB_SILENT", "true")
-    os.environ.setdefault("WANDB_CACHE_DIR", str(cache / "wandb"))
-    os.environ.setdefault("WANDB_CONFIG_DIR", str(cache / "wandb"))
-    os.environ.setdefault("MPLCONFIGDIR", str(cache / "matplotlib"))
-    os.environ.setdefault("HF_HOME", str(cache / "huggingface"))
-    os.environ.setdefault("HF_HUB_OFFLINE", "1")
-    os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")
-
-
-def user_errors(fn):
-    """Report user errors as one clear line instead of a traceback."""
-    from motiondiff.data.errors import DatasetNotFoundError, RepresentationError
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        try:
-            return fn(*args, **kwargs)
-        except (UsageError, DatasetNotFoundError, RepresentationError) as err:
-            print(f"error: {err}", file=sys.stderr)
-            sys.exit(2)
-
-    return wrapper
+from motiondiff.errors import UsageError  # noqa: F401  (re-exported: the CLI's error type)
+from motiondiff.lit.conditions import text_encoder_kwargs  # noqa: F401
+from motiondiff.paths import RELEASE_SUFFIXES, REPO_DIR, SHIPPED_MODEL, SHIPPED_MODELS, find_checkpoint  # noqa: F401
+from motiondiff.scripting import (  # noqa: F401
+    key_value_args,
+    quiet_tool_caches,
+    register_resolvers,
+    to_dict,
+    user_errors,
+)
 
 
 def trainer_parts(cfg: DictConfig) -> tuple[list, list]:
@@ -75,50 +33,6 @@ def trainer_parts(cfg: DictConfig) -> tuple[list, list]:
         callbacks = [c for c in callbacks if not isinstance(c, LearningRateMonitor)]
         logging.getLogger(__name__).info("logger=none: the learning-rate monitor is left out (nothing to log to)")
     return loggers, callbacks
-
-
-def to_dict(cfg: DictConfig | dict | None) -> dict | None:
-    """Plain containers (checkpoints store hyper-parameters that load with torch.load(weights_only=True))."""
-    if cfg is None:
-        return None
-    if isinstance(cfg, DictConfig):
-        return OmegaConf.to_container(cfg, resolve=True)  # type: ignore[return-value]
-    return dict(cfg)
-
-
-def find_checkpoint(spec: str, output_dir: str | Path, condition: str = "text") -> Path:
-    """A checkpoint path: a .ckpt or a release (.safetensors/.json); 'shipped': the model released with the repo
-    for that condition (text or action); 'latest': the newest last.ckpt of a training run under output_dir/train;
-    'best': that run's best-FID one."""
-    if spec == "shipped":
-        shipped = SHIPPED_MODELS[condition]
-        if not shipped.is_file():
-            raise UsageError(f"the shipped {condition} model {shipped} is missing: restore it with "
-                             "`git checkout -- checkpoints`")  # fmt: skip
-        return shipped
-    if spec not in ("latest", "best"):
-        path = Path(spec)
-        if not path.is_file():
-            raise UsageError(
-                f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt or .safetensors release>, "
-                "checkpoint=shipped, checkpoint=latest or checkpoint=best"
-            )
-        return path
-    runs = sorted(Path(output_dir).glob("train*/**/checkpoints/last.ckpt"), key=lambda p: p.stat().st_mtime)
-    if not runs:
-        raise UsageError(
-            f"no trained checkpoint under {output_dir}/train*: train one first (`make train` or `python train.py`) "
-            "pass checkpoint=<path to a .ckpt>, or use the released model: checkpoint=shipped"
-        )
-    if spec == "latest":
-        return runs[-1]
-    best = sorted(runs[-1].parent.glob("best-fid-*.ckpt"))
-    if not best:
-        raise UsageError(
-            f"the newest run {runs[-1].parent.parent} has no best-FID checkpoint (it trained without evaluators or "
-            "never evaluated); use checkpoint=latest"
-        )
-    return best[-1]
 
 
 def sampling_steps(cfg: DictConfig, module) -> int | None:
@@ -143,19 +57,3 @@ def apply_clip_x0(cfg: DictConfig, module) -> str | None:
         except ValueError as err:
             raise UsageError(f"clip_x0={rule}: {err}") from err
     return module.clip_rule
-
-
-def text_encoder_kwargs(cfg_text: DictConfig | dict) -> dict:
-    """Arguments of `build_text_encoder` from a text_encoder config (its `dim` is informational)."""
-    return {k: v for k, v in to_dict(cfg_text).items() if k != "dim"}
-
-
-def key_value_args(argv: list[str], keys) -> dict[str, str]:
-    """``key=value`` arguments of a ``python -m motiondiff...`` command, each key one of ``keys``."""
-    args = {}
-    for a in argv:
-        key, eq, value = a.partition("=")
-        if not eq or key not in keys:
-            raise UsageError(f"unknown argument {a!r}; arguments are key=value with key one of {', '.join(keys)}")
-        args[key] = value
-    return args

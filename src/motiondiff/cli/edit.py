@@ -11,13 +11,14 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps
-from motiondiff.cli.sample import check_text, export_formats, load_module, slug
+from motiondiff.cli.sample import check_text, export_formats, slug
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.eval.editing import edit_numbers
 from motiondiff.export.outputs import export_features
+from motiondiff.lit.loading import load_model as load_module
 
 KINDS = ("inbetween", "parts")
 

@@ -208,7 +208,7 @@ def _log_wandb(out: Path, cfg: DictConfig, rows: dict, extra: dict) -> None:
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_EVALUATE)  # types and ranges before any work
-    from motiondiff.cli.sample import load_module
+    from motiondiff.lit.loading import load_model as load_module
 
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)

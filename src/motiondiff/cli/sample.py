@@ -19,12 +19,10 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import (
-    RELEASE_SUFFIXES,
     UsageError,
     apply_clip_x0,
     find_checkpoint,
     sampling_steps,
-    text_encoder_kwargs,
     to_dict,
 )
 from motiondiff.cli.validate import RULES_SAMPLE, check
@@ -35,31 +33,13 @@ from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.eval.behaviour import mean_joint_speed
 from motiondiff.export.outputs import export_features, parse_formats
+from motiondiff.lit.conditions import check_text, repeated  # noqa: F401  (check_text: used by edit/sample_guided)
 from motiondiff.lit.diffusion import MotionDiffusionModule
-from motiondiff.release import load_release
+from motiondiff.lit.generation import generate_features
+from motiondiff.lit.loading import load_model
 
-MAX_TEXT_CHARS = 1000  # far beyond any caption the encoders were trained on (CLIP keeps 77 tokens)
 # "<text>:<seconds>", seconds a positive decimal, optionally "4s"; a colon not followed by a number is text
 TIMED = re.compile(r"^(?P<text>.*?)\s*:\s*(?P<seconds>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*s?\s*$")
-
-
-def load_module(path: Path, device: str = "cpu") -> MotionDiffusionModule:
-    """A training checkpoint (.ckpt, loaded without running pickled code) or a release (.safetensors + .json)."""
-    if Path(path).suffix in RELEASE_SUFFIXES:
-        return load_release(path, device)
-    module = MotionDiffusionModule.load_from_checkpoint(path, map_location=device, weights_only=True)
-    return module.eval()
-
-
-def check_text(text) -> str:
-    if not isinstance(text, str) or not text.strip():
-        raise UsageError("the text is empty: describe the motion, e.g. text='a person walks forward'")
-    text = " ".join(text.split())
-    if len(text) > MAX_TEXT_CHARS:
-        raise UsageError(
-            f"the text has {len(text)} characters; keep it under {MAX_TEXT_CHARS} (one motion description)"
-        )
-    return text
 
 
 def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str | None]:
@@ -158,52 +138,19 @@ def num_frames(cfg: DictConfig, module: MotionDiffusionModule) -> int:
     return frames
 
 
-def make_condition(module: MotionDiffusionModule, prompt: str | None, n: int):
-    return condition_batch(module, [prompt] * n)
-
-
-def condition_batch(module: MotionDiffusionModule, conditions: list):
-    """The model's condition for a batch: prompts (text models, features cached per prompt), action names or ids
-    (action models), or None (unconditioned models ignore what they are given)."""
-    if module.condition_kind == "text":
-        from motiondiff.text.encoders import build_text_encoder
-
-        index = getattr(module, "text_index", {})
-        if index and all(c in index for c in conditions):  # training captions (e.g. the evaluation callback's):
-            rows = torch.tensor([index[c] for c in conditions], device=module.text_table.device)
-            return module.text_table[rows]  # already prepared; no encoder needed
-        if not hasattr(module, "_encoder"):
-            module._encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
-            module._prompt_features = {}
-        new = [c for c in dict.fromkeys(conditions) if c not in module._prompt_features]
-        if new:
-            module._prompt_features.update(zip(new, module._encoder.encode(new).cpu(), strict=True))
-        rows = torch.stack([module._prompt_features[c] for c in conditions])
-        return module.prepare_text(rows.to(module.device))
-    if module.condition_kind == "action":
-        names = module.hparams.action_names
-        ids = [c if isinstance(c, int | np.integer) else names.index(c) for c in conditions]
-        return torch.tensor(ids, dtype=torch.long, device=module.device)
-    return None
-
-
 def slug(text: str | None) -> str:
     return re.sub(r"[^a-z0-9]+", "_", (text or "unconditioned").lower()).strip("_")[:48] or "prompt"
 
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_SAMPLE)  # types and ranges before any work
-    if cfg.get("method", "mdm") == "guidedmotion":
-        from motiondiff.cli.sample_guided import run as run_guided
-
-        return run_guided(cfg)
-    if cfg.get("method", "mdm") not in ("mdm", "vvmdm"):
+    if cfg.get("method", "mdm") not in ("mdm", "vvmdm"):  # sample.py runs method=guidedmotion with cli.sample_guided
         raise UsageError(f"unknown method={cfg.method!r}; choose mdm, vvmdm or guidedmotion")
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir, "action" if cfg.action is not None else "text")
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
     formats = export_formats(cfg)
-    module = load_module(ckpt, cfg.device)
+    module = load_model(ckpt, cfg.device)
     prompts = collect_prompts(plain, module)
     frames = num_frames(cfg, module) if seconds is None else None
     sigma = smoothing_sigma(cfg, module)
@@ -224,19 +171,12 @@ def run(cfg: DictConfig) -> Path:
         return out
     results = []
     for prompt in prompts:
-        cond = make_condition(module, prompt, cfg.num_samples)
         print(f"sampling {cfg.num_samples} x {frames} frames for {prompt or 'unconditioned'!r}")
-        feats = module.sample(
-            cond,
-            torch.full((cfg.num_samples,), frames),
-            guidance=guidance,
-            sampler=cfg.sampler.name,
-            steps=steps,
-            eta=float(cfg.sampler.eta),
-            generator=generator,
-            progress=True,
-        )
-        feats = module.denormalise(feats).cpu().numpy()
+        n = int(cfg.num_samples)
+        feats = generate_features(module, [prompt] * n, torch.full((n,), frames), batch_size=n, generator=generator,
+                                  guidance=guidance, sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta),
+                                  progress=True)  # fmt: skip
+        feats = np.stack(feats)
         results += save_samples(out, prompt, feats, module, formats, sigma)
     summary["samples"] = results
     (out / "results.json").write_text(json.dumps(summary, indent=1))
@@ -294,7 +234,7 @@ def sample_long(cfg, out, module, prompts: list, seconds: list[float], guidance,
     """One long motion per sample through the timed prompts; returns the results.json entries."""
     overlap, blend = long_motion_settings(cfg, module, prompts, seconds)
     n = cfg.num_samples
-    segments = [(make_condition(module, p, n), s) for p, s in zip(prompts, seconds, strict=True)]
+    segments = [(repeated(module, p, n), s) for p, s in zip(prompts, seconds, strict=True)]
     print(f"sampling {n} long motion(s) through {len(prompts)} timed prompts ({sum(seconds):g} s)")
     long = generate_long(
         module, segments, overlap_s=overlap, blend_s=blend, num_samples=n, guidance=guidance,

@@ -10,18 +10,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import torch
+import numpy as np
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.cli.common import UsageError, find_checkpoint, text_encoder_kwargs
-from motiondiff.guided.local_actions import (
-    LocalActionError,
-    check_weights,
-    guided_sample,
-    local_actions_for,
-    local_descriptions,
-)
+from motiondiff.cli.common import UsageError, find_checkpoint
+from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.models.hierarchical import LEVELS
 
@@ -52,8 +46,9 @@ def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, 
 
 
 def run(cfg: DictConfig) -> Path:
-    from motiondiff.cli.sample import check_text, export_formats, load_module, save_samples, smoothing_sigma
-    from motiondiff.text.encoders import build_text_encoder
+    from motiondiff.cli.sample import check_text, export_formats, save_samples, smoothing_sigma
+    from motiondiff.lit.loading import load_model
+    from motiondiff.pipelines import GuidedMotionPipeline
 
     out = Path(HydraConfig.get().runtime.output_dir)
     if cfg.text is None:
@@ -71,29 +66,23 @@ def run(cfg: DictConfig) -> Path:
     frames = cfg.frames if cfg.frames is not None else round(float(cfg.length) * fps)
     if not 1 <= frames <= module.decoder.hparams.max_frames:
         raise UsageError(f"length must give 1..{module.decoder.hparams.max_frames} frames, got {frames}")
-    generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
     weights = _list(cfg.local_weights)
-    try:  # what can be checked from the caption alone fails before any model runs
+    try:  # what can be checked from the caption alone fails before the local model loads
         _, described = local_descriptions(text)
         check_weights(weights, len(described))
-        graph, local = local_actions_for(
-            module, text, mdm=load_module(find_checkpoint(cfg.local_model, cfg.paths.output_dir), cfg.device),
-            texts=_list(cfg.local_actions), frames=frames, candidates=int(cfg.local_candidates),
-            choose=_choice(cfg.local_choice), generator=generator,
-        )  # fmt: skip
-        encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
-        feats = guided_sample(module, graph, encoder, local, torch.full((cfg.num_samples,), frames),
-                              weights=weights, guidance=cfg.guidance, steps=steps, rho=float(cfg.rho),
-                              generator=generator, progress=True)  # fmt: skip
     except LocalActionError as err:
         raise UsageError(str(err)) from None
-    feats = module.denormalise(feats).cpu().numpy()
-    rows = save_samples(out, text, feats, module.decoder, formats, sigma)
+    local = load_model(find_checkpoint(cfg.local_model, cfg.paths.output_dir), cfg.device)
+    pipe = GuidedMotionPipeline(module, local, str(path))
+    result = pipe(text, seconds=frames / fps, num_samples=int(cfg.num_samples), local_actions=_list(cfg.local_actions),
+                  local_weights=weights, local_candidates=int(cfg.local_candidates), local_choice=_choice(cfg.local_choice),
+                  level_steps=tuple(steps[level] for level in LEVELS), guidance=cfg.guidance, rho=float(cfg.rho),
+                  seed=int(cfg.seed))  # fmt: skip
+    rows = save_samples(out, text, np.stack(result.features), module.decoder, formats, sigma)
     summary = {
         "method": "guidedmotion", "checkpoint": str(path), "text": text, "level_steps": steps, "rho": float(cfg.rho),
         "guidance": module.hparams.sampling.get("guidance", 7.5) if cfg.guidance is None else float(cfg.guidance),
-        "local_actions": [{"text": t, "source": s, "weight": 1.0 if weights is None else float(weights[k])}
-                          for k, (t, s) in enumerate(zip(local.texts, local.sources, strict=True))],
+        "local_actions": result.info["local_actions"],
         "samples": rows,
     }  # fmt: skip
     (out / "results.json").write_text(json.dumps(summary, indent=1))

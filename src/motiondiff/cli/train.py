@@ -113,7 +113,7 @@ def evaluation_callbacks(callbacks: list) -> list:
     if missing:
         log.warning(
             "no evaluators in %s: training without FID/R-precision evaluation or best-FID checkpoint (make them "
-            "with `python -m motiondiff.eval.train_evaluator dataset=<name>`)",
+            "with `python -m motiondiff.cli.train_evaluator dataset=<name>`)",
             missing[0].evaluator_dir,
         )
     else:

@@ -1,4 +1,4 @@
-"""`python -m motiondiff.eval.train_evaluator dataset=...`: train and release a dataset's evaluators.
+"""`python -m motiondiff.cli.train_evaluator dataset=...`: train and release a dataset's evaluators.
 
 Trains the text-motion matching evaluator (if the dataset has captions) and the action classifier (if it has
 labels) on the train split, keeps the best validation epoch, checks them on the test split and writes
@@ -153,7 +153,7 @@ def run(cfg: DictConfig) -> Path:
     val_checks = test_checks(evaluators, dm, seed=cfg.seed, split="val")
     out = Path(cfg.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    command = "python -m motiondiff.eval.train_evaluator " + " ".join(_overrides(cfg))
+    command = "python -m motiondiff.cli.train_evaluator " + " ".join(_overrides(cfg))
     for kind, model in models.items():
         meta = {
             "dataset": cfg.dataset.name,
@@ -172,3 +172,17 @@ def run(cfg: DictConfig) -> Path:
         for k, v in values.items():
             print(f"  {split:>4} {k:>26}: {v:.4g}" if isinstance(v, float) else f"  {split:>4} {k:>26}: {v}")
     return out
+
+
+if (
+    __name__ == "__main__"
+):  # python -m motiondiff.cli.train_evaluator dataset=<name> [evaluator_model=paper] [which=[...]]
+    import hydra
+
+    from motiondiff.scripting import quiet_tool_caches, register_resolvers, user_errors
+
+    register_resolvers()
+    quiet_tool_caches()
+    hydra.main(version_base="1.3", config_path=str(REPO_DIR / "conf"), config_name="train_evaluator")(
+        user_errors(run)
+    )()

@@ -30,7 +30,7 @@ from motiondiff.data.captions import GENERATED_NOTE, generate_captions, measure
 from motiondiff.data.compositional_join import Part, join_captions, join_parts, place_canonically
 from motiondiff.data.compositional_report import readme, seam_measures, split_report, summary
 from motiondiff.data.features import canonicalize_joints, mean_std
-from motiondiff.data.prepare import PrepareError, check_output
+from motiondiff.data.prepare_writer import PrepareError, check_output
 from motiondiff.data.prepared import SPLITS, PreparedSplit, fill_derived, load_split, save_split
 from motiondiff.data.processing import most_active_window
 

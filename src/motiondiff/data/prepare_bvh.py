@@ -38,7 +38,7 @@ from motiondiff.atomic import atomic_write
 from motiondiff.data.bvh import BVHError, parse_bvh
 from motiondiff.data.captions import GENERATED_NOTE
 from motiondiff.data.joint_map import JointMap
-from motiondiff.data.prepare import PrepareError, check_output, copy_license, process_and_write
+from motiondiff.data.prepare_writer import PrepareError, check_output, copy_license, process_and_write
 from motiondiff.data.sources import Source, SourceError
 
 COLUMNS = ("file", "action", "style", "caption")

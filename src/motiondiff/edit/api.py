@@ -108,7 +108,7 @@ def _generator(module, generator: torch.Generator | None, seed: int | None) -> t
 def _inpaint_motions(module, motions, keeps, conds, num_samples, options, generator, progress) -> list[np.ndarray]:
     """De-normalised features of num_samples edits per motion (padded to one batch), the input's features exact
     where ``keeps[m]`` (N, D, bool)."""
-    from motiondiff.cli.sample import condition_batch
+    from motiondiff.lit.conditions import condition_batch
 
     knowns = [m.features for m in motions]
     order = [m for m in range(len(knowns)) for _ in range(num_samples)]

@@ -75,10 +75,10 @@ def summarise(result: dict) -> tuple[float, list[dict]]:
 def main(argv: list[str]) -> None:
     import os
 
-    from motiondiff.cli.common import REPO_DIR, find_checkpoint
-    from motiondiff.cli.sample import load_module
     from motiondiff.eval.behaviour import sampling_args
     from motiondiff.eval.protocol import Evaluators
+    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.paths import REPO_DIR, find_checkpoint
 
     args = dict(a.split("=", 1) for a in argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))

@@ -93,17 +93,15 @@ def generate(
 ) -> list[np.ndarray]:
     """n de-normalised feature sequences (frames, D) for a prompt (None: unconditioned), with the model's default
     guidance unless given; ``smooth_sigma`` > 0: vvMDM's temporal filter on the joints (``smooth_features``)."""
-    from motiondiff.cli.sample import make_condition
     from motiondiff.edit.smoothing import smooth_features
+    from motiondiff.lit.generation import generate_features
 
     frames = min(round(seconds * module.hparams.fps), module.hparams.max_frames)
     gen = torch.Generator().manual_seed(seed)
     guidance = module.default_guidance if guidance is None else guidance
-    cond = make_condition(module, prompt, n) if prompt is not None else None
-    feats = module.sample(
-        cond, torch.full((n,), frames), guidance=guidance, sampler=sampler, steps=steps, generator=gen, progress=True
-    )
-    return [smooth_features(f, smooth_sigma) for f in module.denormalise(feats).cpu().numpy()]
+    feats = generate_features(module, [prompt] * n, torch.full((n,), frames), batch_size=max(n, 1), generator=gen,
+                              guidance=guidance, sampler=sampler, steps=steps, progress=True)  # fmt: skip
+    return [smooth_features(f, smooth_sigma) for f in feats]
 
 
 def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test")) -> list[np.ndarray]:
@@ -205,10 +203,10 @@ def main(argv: list[str]) -> None:
     import os
     import time
 
-    from motiondiff.cli.common import REPO_DIR, find_checkpoint
-    from motiondiff.cli.sample import load_module
     from motiondiff.eval import action_table
     from motiondiff.eval.protocol import Evaluators
+    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.paths import REPO_DIR, find_checkpoint
 
     args = dict(a.split("=", 1) for a in argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))

@@ -359,9 +359,11 @@ KEYS = ("checkpoint", "num_edits", "num_part_edits", "split", "modes", "sampler"
 
 
 def main(argv: list[str]) -> Path:
-    from motiondiff.cli.common import REPO_DIR, UsageError, find_checkpoint, key_value_args, quiet_tool_caches
-    from motiondiff.cli.sample import load_module
     from motiondiff.edit.masks import EditError
+    from motiondiff.errors import UsageError
+    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.paths import REPO_DIR, find_checkpoint
+    from motiondiff.scripting import key_value_args, quiet_tool_caches
 
     quiet_tool_caches()
     args = key_value_args(argv, KEYS)
@@ -403,6 +405,6 @@ def main(argv: list[str]) -> Path:
 
 
 if __name__ == "__main__":
-    from motiondiff.cli.common import user_errors
+    from motiondiff.scripting import user_errors
 
     user_errors(main)(sys.argv[1:])

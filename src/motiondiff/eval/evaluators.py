@@ -9,7 +9,7 @@
   output at the last valid frame goes through `linear1` + tanh (the 30-d features for FID/diversity) and `linear2`
   (the class logits). `load_official_action_classifier` reads the official HumanAct12 checkpoint.
 
-Evaluators trained on our own datasets (`python -m motiondiff.eval.train_evaluator`) have the same architectures
+Evaluators trained on our own datasets (`python -m motiondiff.cli.train_evaluator`) have the same architectures
 (sizes configurable) and are released as safetensors + JSON config (`save_released` / `load_released`).
 """
 
@@ -306,7 +306,7 @@ def load_released(path: str | Path) -> tuple[nn.Module, dict]:
     for p in (weights, config_file):
         if not p.is_file():
             raise FileNotFoundError(
-                f"{p} not found: rebuild the evaluators with `python -m motiondiff.eval.train_evaluator`"
+                f"{p} not found: rebuild the evaluators with `python -m motiondiff.cli.train_evaluator`"
             )
     doc = json.loads(config_file.read_text())
     model = _KINDS[doc["kind"]](**doc["config"])

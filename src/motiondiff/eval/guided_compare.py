@@ -25,8 +25,11 @@ import numpy as np
 import torch
 
 from motiondiff.bench.timing import median_seconds as timed_median
-from motiondiff.cli.common import REPO_DIR, UsageError, key_value_args, text_encoder_kwargs
+from motiondiff.errors import UsageError
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
+from motiondiff.lit.conditions import text_encoder_kwargs
+from motiondiff.paths import REPO_DIR
+from motiondiff.scripting import key_value_args
 
 KEYS = ("latent", "mdm", "local_model", "replications", "level_steps", "mdm_steps", "local_frames",
         "timing_repeats", "timing_only", "seed", "out", "data", "evaluators")  # fmt: skip
@@ -108,7 +111,7 @@ def median_seconds(fn, repeats: int) -> float:
 
 def sampling_times(latent, mdm, local_mdm, table, caption: str, frames: int, args: dict) -> dict[str, float]:
     """Median seconds for one motion of ``frames`` frames from ``caption``, guidance on, in this process."""
-    from motiondiff.cli.sample import condition_batch
+    from motiondiff.lit.conditions import condition_batch
     from motiondiff.models.graph import batch_graphs
     from motiondiff.text.parse import ROLES
 
@@ -202,12 +205,12 @@ def write(out: Path, rows: dict, times: dict, meta: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from motiondiff.cli.common import find_checkpoint
-    from motiondiff.cli.sample import load_module
     from motiondiff.data.datamodules import PreparedDataModule
     from motiondiff.eval.protocol import EvalClips, Evaluators
     from motiondiff.guided.local_actions import check_same_features
     from motiondiff.lit.latent import HierarchicalLatentModule
+    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.paths import find_checkpoint
     from motiondiff.text.encoders import build_text_encoder
     from motiondiff.text.graph_features import graph_table
 

@@ -27,6 +27,7 @@ from motiondiff.data.features import joints_from_features
 from motiondiff.data.representation_spec import bridge_from_spec
 from motiondiff.eval import metrics as M
 from motiondiff.eval.evaluators import ActionClassifierGRU, TextMotionEvaluator, load_released, motion_input
+from motiondiff.lit.generation import generate_features
 
 log = logging.getLogger(__name__)
 TEXT_MOTION, ACTION = "text_motion", "action"
@@ -122,7 +123,7 @@ class Evaluators:
         found = {k: p for k, p in found.items() if p.is_file()}
         if not found:
             raise FileNotFoundError(
-                f"no evaluator in {folder}: train one with `python -m motiondiff.eval.train_evaluator "
+                f"no evaluator in {folder}: train one with `python -m motiondiff.cli.train_evaluator "
                 f"dataset=<name>` (or point evaluator.dir at a folder with text_motion/action .safetensors)"
             )
         models, meta = {}, {}
@@ -239,7 +240,6 @@ def multimodality(embeddings: np.ndarray, num_pairs: int = 10, seed: int = 0) ->
     return M.multimodality(embeddings, num_pairs, np.random.default_rng(seed))
 
 
-@torch.inference_mode()
 def generate(
     module,
     conditions: list,
@@ -251,33 +251,14 @@ def generate(
     smooth_sigma: float | None = None,
     **sampling,
 ) -> list[np.ndarray]:
-    """De-normalised generated features, one per condition (caption, action id or None), at the given lengths.
-    `sampling`: guidance, sampler, steps, eta (see MotionDiffusionModule.sample). `precision="bf16-mixed"` runs
-    the denoiser under bf16 autocast, as it was trained by default (~2.7x faster on this project's CPU); any other
-    Lightning precision string samples in full precision. `smooth_sigma` > 0 applies vvMDM's temporal filter to the
-    decoded joints of every motion (HumanML3D or jp features; ``edit.smoothing.smooth_features``)."""
-    from motiondiff.cli.sample import condition_batch
+    """De-normalised generated features, one per condition (caption, action id or None), at the given lengths
+    (`motiondiff.lit.generation.generate_features`), with vvMDM's temporal filter when `smooth_sigma` > 0 (HumanML3D
+    or jp features; ``edit.smoothing.smooth_features``), so the metrics see what sample.py saves."""
     from motiondiff.edit.smoothing import smooth_features
 
-    bf16 = str(precision).startswith("bf16")
+    feats = generate_features(module, conditions, lengths, batch_size, generator, progress, precision, **sampling)
     layout = getattr(getattr(module, "representation", None), "name", "hml263")
-
-    out: list[np.ndarray] = []
-    order = torch.argsort(lengths, descending=True)  # similar lengths per batch: less padding to compute
-    results: dict[int, np.ndarray] = {}
-    for s in range(0, len(order), batch_size):
-        idx = order[s : s + batch_size].tolist()
-        cond = condition_batch(module, [conditions[i] for i in idx])
-        lens = lengths[idx]
-        with torch.autocast(module.device.type, dtype=torch.bfloat16, enabled=bf16):
-            feats = module.sample(cond, lens, generator=generator, **sampling)
-        feats = module.denormalise(feats.float()).cpu().numpy()
-        for row, i in enumerate(idx):
-            results[i] = smooth_features(feats[row, : int(lengths[i])], smooth_sigma, layout)
-        if progress is not None:
-            progress.update(len(idx))
-    out = [results[i] for i in range(len(conditions))]
-    return out
+    return [smooth_features(f, smooth_sigma, layout) for f in feats]
 
 
 def time_reversed(features: np.ndarray, num_joints: int) -> np.ndarray:

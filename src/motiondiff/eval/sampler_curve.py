@@ -18,7 +18,9 @@ import json
 import sys
 from pathlib import Path
 
-from motiondiff.cli.common import REPO_DIR, UsageError, key_value_args
+from motiondiff.errors import UsageError
+from motiondiff.paths import REPO_DIR
+from motiondiff.scripting import key_value_args
 
 KEYS = ("runs", "bench", "tolerance", "accuracy_margin", "out")
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "sampler_curve"

@@ -21,11 +21,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.cli.common import REPO_DIR, UsageError, key_value_args
+from motiondiff.errors import UsageError
 from motiondiff.eval import report
 from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_metrics
 from motiondiff.lit.vae import MotionVAEModule, mpjpe
 from motiondiff.models.vae import LEVEL_TOKENS
+from motiondiff.paths import REPO_DIR
+from motiondiff.scripting import key_value_args
 
 KEYS = ("motion", "action", "specific", "out", "split", "replications", "seed", "data", "evaluator_dir")
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "vae_levels"
@@ -64,7 +66,7 @@ def datamodule(module: MotionVAEModule, data_root: str | None):
     from hydra import compose, initialize_config_dir
     from hydra.utils import instantiate
 
-    from motiondiff.cli.common import register_resolvers
+    from motiondiff.scripting import register_resolvers
 
     register_resolvers()
     hp = module.hparams
@@ -202,7 +204,7 @@ def format_table(rows: dict, infos: dict, pairs: list[dict], notes: list[str]) -
 
 
 def main(argv: list[str]) -> Path:
-    from motiondiff.cli.common import quiet_tool_caches
+    from motiondiff.scripting import quiet_tool_caches
 
     quiet_tool_caches()
     args = key_value_args(argv, KEYS)
@@ -254,6 +256,6 @@ def main(argv: list[str]) -> Path:
 
 
 if __name__ == "__main__":
-    from motiondiff.cli.common import user_errors
+    from motiondiff.scripting import user_errors
 
     user_errors(main)(sys.argv[1:])

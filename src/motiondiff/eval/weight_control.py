@@ -21,9 +21,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.cli.common import REPO_DIR, UsageError, find_checkpoint, key_value_args, text_encoder_kwargs
 from motiondiff.diffusion.energy_guidance import DEFAULT_RHO
+from motiondiff.errors import UsageError
 from motiondiff.eval.report import mean_ci
+from motiondiff.lit.conditions import text_encoder_kwargs
+from motiondiff.paths import REPO_DIR, find_checkpoint
+from motiondiff.scripting import key_value_args
 
 KEYS = ("checkpoint", "local_model", "captions", "weights", "samples", "level_steps", "rho", "final_level", "seed", "out",
         "data")  # fmt: skip
@@ -150,10 +153,10 @@ def write(out: Path, meta: dict, results: list[dict], summary: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from motiondiff.cli.sample import load_module
     from motiondiff.data.datamodules import PreparedDataModule
     from motiondiff.eval.protocol import Evaluators
     from motiondiff.lit.latent import HierarchicalLatentModule
+    from motiondiff.lit.loading import load_model as load_module
     from motiondiff.text.encoders import build_text_encoder
 
     args = key_value_args(argv if argv is not None else sys.argv[1:], KEYS)

@@ -61,7 +61,7 @@ def generate_local_motions(
     generator: torch.Generator | None = None,
 ) -> list[list[torch.Tensor]]:
     """``candidates`` de-normalised motions (frames, D) per description from an MDM text model (DDIM)."""
-    from motiondiff.cli.sample import condition_batch  # the one prompt -> condition path (encoder cached on mdm)
+    from motiondiff.lit.generation import generate_features
 
     if mdm.condition_kind != "text":
         raise LocalActionError("local actions are generated from text: local_model must be a text-conditioned model")
@@ -69,9 +69,9 @@ def generate_local_motions(
     scale = mdm.default_guidance if guidance is None else float(guidance)
     out = []
     for text in texts:
-        cond = condition_batch(mdm, [text] * candidates)
-        feats = mdm.sample(cond, lengths, guidance=scale, sampler="ddim", steps=steps, generator=generator)
-        out.append(list(mdm.denormalise(feats).float().cpu()))
+        feats = generate_features(mdm, [text] * candidates, lengths, batch_size=candidates, generator=generator,
+                                  guidance=scale, sampler="ddim", steps=steps)  # fmt: skip
+        out.append([torch.from_numpy(f) for f in feats])
     return out
 
 

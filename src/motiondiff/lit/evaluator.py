@@ -1,4 +1,4 @@
-"""LightningModules that train the evaluators on any dataset of ours (`python -m motiondiff.eval.train_evaluator`).
+"""LightningModules that train the evaluators on any dataset of ours (`python -m motiondiff.cli.train_evaluator`).
 
 - `TextMotionEvaluatorModule`: captions and motions embedded contrastively. The loss is a symmetric InfoNCE over
   negative Euclidean distances (the distance R-precision ranks by), with a learned scale; other clips of the batch

@@ -1,0 +1,49 @@
+"""The one generation chain: conditions -> the model's condition batches -> sampling -> de-normalised features.
+
+Every caller that makes motion from prompts, actions or nothing (the pipelines, sample.py, the evaluation protocol,
+the behaviour report) goes through `generate_features`; editing adds its known frames through `module.sample` and
+GuidedMotion samples its own latent levels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from motiondiff.lit.conditions import condition_batch
+
+
+@torch.inference_mode()
+def generate_features(
+    module,
+    conditions: list,
+    lengths: torch.Tensor,
+    batch_size: int = 64,
+    generator: torch.Generator | None = None,
+    bar=None,
+    precision: str = "32-true",
+    **sampling,
+) -> list[np.ndarray]:
+    """De-normalised features (N_i, D), one per condition (prompt, action name/id or None), at the given lengths.
+
+    `sampling`: guidance, sampler, steps, eta, ... (see MotionDiffusionModule.sample). Conditions are sorted by
+    length so each batch pads little; `bar` (a tqdm bar or None) is advanced per motion; `precision`
+    "bf16-mixed" runs the denoiser under bf16 autocast (as such models train), anything else in full precision."""
+    lengths = torch.as_tensor(lengths)
+    if len(conditions) != len(lengths):
+        raise ValueError(f"{len(conditions)} conditions for {len(lengths)} lengths")
+    bf16 = str(precision).startswith("bf16")
+    order = torch.argsort(lengths, descending=True, stable=True)  # equal lengths keep their order
+    results: dict[int, np.ndarray] = {}
+    for s in range(0, len(order), batch_size):
+        idx = order[s : s + batch_size].tolist()
+        cond = condition_batch(module, [conditions[i] for i in idx])
+        lens = lengths[idx]
+        with torch.autocast(module.device.type, dtype=torch.bfloat16, enabled=bf16):
+            feats = module.sample(cond, lens, generator=generator, **sampling)
+        feats = module.denormalise(feats.float()).cpu().numpy()
+        for row, i in enumerate(idx):
+            results[i] = feats[row, : int(lengths[i])]
+        if bar is not None:
+            bar.update(len(idx))
+    return [results[i] for i in range(len(conditions))]

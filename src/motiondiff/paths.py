@@ -1,0 +1,52 @@
+"""Where the project's own files are: the source checkout, the released models (`checkpoint=shipped`), and the
+checkpoints a user names (`find_checkpoint`: a path, shipped, latest or best)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from motiondiff.errors import UsageError
+
+REPO_DIR = Path(__file__).resolve().parents[2]
+# checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
+SHIPPED_MODELS = {
+    "text": REPO_DIR / "checkpoints" / "models" / "bandai_mini_text_cpu.safetensors",
+    "action": REPO_DIR / "checkpoints" / "models" / "bandai_action_cpu.safetensors",
+}
+SHIPPED_MODEL = SHIPPED_MODELS["text"]
+RELEASE_SUFFIXES = (".safetensors", ".json")
+
+
+def find_checkpoint(spec: str, output_dir: str | Path, condition: str = "text") -> Path:
+    """A checkpoint path: a .ckpt or a release (.safetensors/.json); 'shipped': the model released with the repo
+    for that condition (text or action); 'latest': the newest last.ckpt of a training run under output_dir/train;
+    'best': that run's best-FID one."""
+    if spec == "shipped":
+        shipped = SHIPPED_MODELS[condition]
+        if not shipped.is_file():
+            raise UsageError(f"the shipped {condition} model {shipped} is missing: restore it with "
+                             "`git checkout -- checkpoints`")  # fmt: skip
+        return shipped
+    if spec not in ("latest", "best"):
+        path = Path(spec)
+        if not path.is_file():
+            raise UsageError(
+                f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt or .safetensors release>, "
+                "checkpoint=shipped, checkpoint=latest or checkpoint=best"
+            )
+        return path
+    runs = sorted(Path(output_dir).glob("train*/**/checkpoints/last.ckpt"), key=lambda p: p.stat().st_mtime)
+    if not runs:
+        raise UsageError(
+            f"no trained checkpoint under {output_dir}/train*: train one first (`make train` or `python train.py`) "
+            "pass checkpoint=<path to a .ckpt>, or use the released model: checkpoint=shipped"
+        )
+    if spec == "latest":
+        return runs[-1]
+    best = sorted(runs[-1].parent.glob("best-fid-*.ckpt"))
+    if not best:
+        raise UsageError(
+            f"the newest run {runs[-1].parent.parent} has no best-FID checkpoint (it trained without evaluators or "
+            "never evaluated); use checkpoint=latest"
+        )
+    return best[-1]

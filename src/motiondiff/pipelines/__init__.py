@@ -1,0 +1,13 @@
+"""The user-facing Python API: load a released or trained model and generate, edit or chain motion in a few lines.
+
+from motiondiff.pipelines import MotionPipeline
+pipe = MotionPipeline.from_pretrained("text")
+out = pipe("a person walks forward", seconds=4)
+out.save("out", formats=["bvh", "mp4"])
+"""
+
+from motiondiff.pipelines.guided import GuidedMotionPipeline
+from motiondiff.pipelines.motion import MotionPipeline, resolve_model
+from motiondiff.pipelines.output import MotionOutput
+
+__all__ = ["GuidedMotionPipeline", "MotionOutput", "MotionPipeline", "resolve_model"]

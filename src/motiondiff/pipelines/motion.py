@@ -1,0 +1,294 @@
+"""`MotionPipeline`: one object to generate and edit motion with a trained model (MDM or vvMDM).
+
+    from motiondiff.pipelines import MotionPipeline
+    pipe = MotionPipeline.from_pretrained("text")                 # the released text model
+    out = pipe("a person walks forward", seconds=4, num_samples=2)
+    out.save("walks", formats=["bvh", "mp4"])
+
+The same object in-betweens and edits body parts of a motion (a BVH, a joints .npy, a dataset clip id or a motion it
+made) and makes long motion from several prompts in order. Every call checks its input and raises UsageError with the
+fix; sampling goes through the one generation chain (`motiondiff.lit.generation`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from motiondiff.edit.api import edit_parts as _edit_parts
+from motiondiff.edit.api import inbetween as _inbetween
+from motiondiff.edit.inputs import InputMotion, load_input_motion
+from motiondiff.edit.long_motion import generate_long
+from motiondiff.edit.masks import EditError
+from motiondiff.edit.smoothing import smooth_joints
+from motiondiff.errors import UsageError
+from motiondiff.lit.conditions import check_text, repeated
+from motiondiff.lit.generation import generate_features
+from motiondiff.lit.loading import load_model
+from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
+from motiondiff.pipelines.output import MotionOutput
+
+MODELS_DIR = REPO_DIR / "checkpoints" / "models"
+
+
+def resolve_model(name_or_path: str | Path) -> Path:
+    """A released model's name ("text", "action", or a file stem in checkpoints/models) or a .ckpt/.safetensors path."""
+    key = str(name_or_path)
+    if key in SHIPPED_MODELS:
+        path = SHIPPED_MODELS[key]
+    elif (MODELS_DIR / f"{key}.safetensors").is_file():
+        path = MODELS_DIR / f"{key}.safetensors"
+    else:
+        path = Path(key)
+    if not path.is_file():
+        names = sorted({*SHIPPED_MODELS, *(p.stem for p in MODELS_DIR.glob("*.safetensors"))})
+        raise UsageError(f"no model {key!r}: give a released model ({', '.join(names)}) or a path to a .ckpt or "
+                         ".safetensors file")  # fmt: skip
+    return path
+
+
+class MotionPipeline:
+    """Generate (``__call__``), edit (``inbetween``, ``edit_parts``) and chain (``long``) motion with one model."""
+
+    def __init__(self, model, source: str = ""):
+        self.model = model.eval()
+        self.source = source
+
+    @classmethod
+    def from_pretrained(cls, name_or_path: str | Path = "text", device: str = "cpu") -> MotionPipeline:
+        path = resolve_model(name_or_path)
+        return cls(load_model(path, device), str(path))
+
+    # ---- what the model does ------------------------------------------------------------------------------------
+    @property
+    def fps(self) -> float:
+        return float(self.model.hparams.fps)
+
+    @property
+    def max_seconds(self) -> float:
+        return int(self.model.hparams.max_frames) / self.fps
+
+    @property
+    def condition_kind(self) -> str:
+        """ "text", "action" or "none"."""
+        return self.model.condition_kind
+
+    @property
+    def actions(self) -> list[str]:
+        """The action names an action model knows (empty for other models)."""
+        return list(self.model.hparams.get("action_names") or [])
+
+    # ---- generation ---------------------------------------------------------------------------------------------
+    def __call__(
+        self,
+        prompt: str | int | list | None = None,
+        *,
+        seconds: float | list[float] = 4.0,
+        num_samples: int = 1,
+        guidance: float | None = None,
+        sampler: str = "ddim",
+        steps: int | None = None,
+        eta: float = 0.0,
+        seed: int = 0,
+        smooth_sigma: float | None = None,
+    ) -> MotionOutput:
+        """``num_samples`` motions per prompt: texts (text models), action names or ids (action models) or None
+        (unconditioned); one prompt or a list. ``seconds``: one length, or one per prompt. ``guidance``: the
+        classifier-free guidance scale (None: the model's default); ``steps``: sampler steps (None: 50 for DDIM, the
+        whole chain for DDPM, at most the model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
+        prompts = self._prompts(prompt)
+        lengths = [self._frames(s) for s in self._per_prompt(seconds, len(prompts), "seconds")]
+        n = self._count(num_samples)
+        sampling = self._sampling(guidance, sampler, steps, eta)
+        conditions = [p for p in prompts for _ in range(n)]
+        frames = torch.tensor([f for f in lengths for _ in range(n)])
+        generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
+        feats = generate_features(self.model, conditions, frames, batch_size=64, generator=generator, **sampling)
+        joints = [self.model.representation.decode_numpy(f).astype(np.float32) for f in feats]
+        if smooth_sigma:
+            joints = [smooth_joints(j, float(smooth_sigma)) for j in joints]
+        info = {"model": self.source, **sampling, "seed": int(seed), "smooth_sigma": smooth_sigma,
+                "joints_changed": bool(smooth_sigma)}  # fmt: skip
+        return self._output(joints, feats, [self._label(c) for c in conditions], info)
+
+    def long(
+        self,
+        prompts: list[str],
+        seconds: float | list[float] = 4.0,
+        *,
+        overlap: float = 1.0,
+        blend: float = 0.25,
+        num_samples: int = 1,
+        seed: int = 0,
+        **sampling: Any,
+    ) -> MotionOutput:
+        """One motion per sample that does the prompts in order, each for its seconds (plain strings, or
+        "text:seconds"); each part continues from the last ``overlap`` seconds of the one before."""
+        texts, secs = [], []
+        for item, s in zip(prompts, self._per_prompt(seconds, len(prompts), "seconds"), strict=True):
+            text, _, timed = str(item).rpartition(":") if _is_timed(item) else (item, "", "")
+            texts.append(self._check_prompt(text))
+            secs.append(float(timed) if timed else float(s))
+        n = self._count(num_samples)
+        generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
+        try:
+            result = generate_long(self.model, [(repeated(self.model, t, n), s) for t, s in zip(texts, secs, strict=True)],
+                                   overlap_s=float(overlap), blend_s=float(blend), num_samples=n, generator=generator,
+                                   labels=texts, **sampling)  # fmt: skip
+        except ValueError as err:
+            raise UsageError(str(err)) from None
+        title = " then ".join(texts)
+        info = {"model": self.source, "segments": result.segments, "seed": int(seed), **sampling}
+        return self._output(list(result.joints), list(result.features), [title] * n, info)
+
+    # ---- editing ------------------------------------------------------------------------------------------------
+    def inbetween(self, motion, prompt=None, *, prefix=None, suffix=None, num_samples: int = 1, seed: int = 0,
+                  **sampling: Any) -> MotionOutput:  # fmt: skip
+        """Keep the first ``prefix`` and last ``suffix`` of ``motion`` (frames, or a fraction; default 25% each) and
+        generate the frames between, following ``prompt``. ``motion``: a .bvh/.npy path, a dataset clip id, or a
+        MotionOutput (its first motion)."""
+        source = self._input(motion)
+        return self._edited(_inbetween, source, prompt, dict(prefix=prefix, suffix=suffix), num_samples, seed, sampling)
+
+    def edit_parts(self, motion, prompt=None, *, parts="upper_body", num_samples: int = 1, seed: int = 0,
+                   **sampling: Any) -> MotionOutput:  # fmt: skip
+        """Regenerate ``parts`` of ``motion`` (a preset such as "upper_body" or joint names) from ``prompt`` and keep
+        the rest of the body as it is, over every frame (MDM's body-part editing)."""
+        source = self._input(motion)
+        try:
+            kept = _complement_parts(self.model.representation.skeleton, parts)
+        except EditError as err:
+            raise UsageError(str(err)) from None
+        return self._edited(_edit_parts, source, prompt, {"parts": kept}, num_samples, seed, sampling)
+
+    # ---- helpers ------------------------------------------------------------------------------------------------
+    def _edited(self, fn, source: InputMotion, prompt, options: dict, num_samples, seed, sampling) -> MotionOutput:
+        condition = None if prompt is None else self._prompts(prompt)[0]
+        try:
+            result = fn(self.model, source, condition=condition, num_samples=self._count(num_samples), seed=int(seed),
+                        **options, **sampling)  # fmt: skip
+        except (EditError, ValueError) as err:
+            raise UsageError(str(err)) from None
+        info = {"model": self.source, "input": source.source, **result.settings}
+        return self._output(
+            list(result.joints), list(result.features), [self._label(c) for c in result.conditions], info
+        )
+
+    def _input(self, motion) -> InputMotion:
+        if isinstance(motion, MotionOutput):
+            with _TempNpy(motion.joints[0]) as path:
+                return self._load(path)
+        return self._load(motion)
+
+    def _load(self, source) -> InputMotion:
+        try:
+            return load_input_motion(source, self.model)
+        except (EditError, ValueError) as err:
+            raise UsageError(str(err)) from None
+
+    def _output(self, joints, feats, prompts, info) -> MotionOutput:
+        rep = self.model.representation
+        return MotionOutput(joints, [np.asarray(f) for f in feats], prompts, self.fps, rep.skeleton, rep, info)
+
+    def _prompts(self, prompt) -> list:
+        items = list(prompt) if isinstance(prompt, list | tuple) else [prompt]
+        if not items:
+            raise UsageError("give at least one prompt")
+        kind = self.condition_kind
+        if kind == "none":
+            if any(p is not None for p in items):
+                raise UsageError("this model is unconditioned: call it without a prompt")
+            return items
+        if kind == "action":
+            return [self._check_action(p) for p in items]
+        return [self._check_prompt(p) for p in items]
+
+    def _check_prompt(self, text) -> str:
+        return check_text(text)
+
+    def _check_action(self, action):
+        names = self.actions
+        if isinstance(action, int | np.integer) and 0 <= int(action) < len(names):
+            return int(action)
+        if isinstance(action, str) and action in names:
+            return action
+        raise UsageError(f"unknown action {action!r}; this model knows: {', '.join(names)}")
+
+    def _label(self, condition) -> str | None:
+        if isinstance(condition, int | np.integer) and self.actions:
+            return self.actions[int(condition)]
+        return condition
+
+    def _frames(self, seconds) -> int:
+        if isinstance(seconds, bool) or not isinstance(seconds, int | float) or not np.isfinite(seconds):
+            raise UsageError(f"seconds must be a number, got {seconds!r}")
+        frames = round(float(seconds) * self.fps)
+        if not 1 <= frames <= int(self.model.hparams.max_frames):
+            raise UsageError(f"seconds must be between {1 / self.fps:g} and this model's {self.max_seconds:g}, "
+                             f"got {seconds:g}")  # fmt: skip
+        return frames
+
+    @staticmethod
+    def _per_prompt(value, n: int, name: str) -> list:
+        values = list(value) if isinstance(value, list | tuple) else [value] * n
+        if len(values) != n:
+            raise UsageError(f"{name}: give one value or one per prompt ({n}), got {len(values)}")
+        return values
+
+    @staticmethod
+    def _count(num_samples) -> int:
+        if isinstance(num_samples, bool) or not isinstance(num_samples, int) or num_samples < 1:
+            raise UsageError(f"num_samples must be a whole number >= 1, got {num_samples!r}")
+        return num_samples
+
+    def _sampling(self, guidance, sampler, steps, eta) -> dict:
+        guidance = self.model.default_guidance if guidance is None else guidance
+        if isinstance(guidance, bool) or not isinstance(guidance, int | float) or not 0 <= guidance < float("inf"):
+            raise UsageError(f"guidance must be a number >= 0, got {guidance!r}")
+        if sampler not in ("ddim", "ddpm"):
+            raise UsageError(f"sampler must be 'ddim' or 'ddpm', got {sampler!r}")
+        t = int(self.model.diffusion.num_steps)
+        if steps is None:
+            steps = min(50, t) if sampler == "ddim" else None
+        elif isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= t:
+            raise UsageError(f"steps must be a whole number in 1..{t} (this model's diffusion steps), got {steps!r}")
+        return {"guidance": float(guidance), "sampler": sampler, "steps": steps, "eta": float(eta)}
+
+
+def _is_timed(item) -> bool:
+    text, sep, tail = str(item).rpartition(":")
+    try:
+        return bool(sep) and bool(text.strip()) and float(tail) > 0
+    except ValueError:
+        return False
+
+
+def _complement_parts(skeleton, parts) -> list[int]:
+    """The joints to keep when ``parts`` are regenerated."""
+    from motiondiff.edit.masks import resolve_joints
+
+    regenerate = set(resolve_joints(skeleton, parts))
+    kept = [j for j in range(skeleton.num_joints) if j not in regenerate]
+    if not kept:
+        raise EditError(f"{parts!r} is the whole body: generate a new motion with the pipeline's call instead")
+    return kept
+
+
+class _TempNpy:
+    """A joints array as a temporary .npy file, for the editing loaders that read files."""
+
+    def __init__(self, joints: np.ndarray):
+        import tempfile
+
+        self.dir = tempfile.TemporaryDirectory()
+        self.path = Path(self.dir.name) / "motion.npy"
+        np.save(self.path, np.asarray(joints, dtype=np.float32))
+
+    def __enter__(self) -> Path:
+        return self.path
+
+    def __exit__(self, *exc) -> None:
+        self.dir.cleanup()

@@ -1,0 +1,83 @@
+"""What a pipeline returns: the generated motions as joints and as the model's features, with what is needed to save,
+export or show them."""
+
+from __future__ import annotations
+
+import json
+import re
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from motiondiff.data.representations import Representation
+from motiondiff.export.outputs import export_features, parse_formats
+from motiondiff.skeleton import Skeleton
+
+
+def _stem(text: str | None, index: int) -> str:
+    words = re.sub(r"[^a-z0-9]+", "_", (text or "unconditioned").lower()).strip("_")[:48] or "motion"
+    return f"{index:02d}_{words}"
+
+
+@dataclass
+class MotionOutput:
+    """Generated motions. ``joints[i]`` (frames, J, 3) in metres, y up, on ``skeleton``; ``features[i]`` the model's
+    de-normalised features of the same motion; ``prompts[i]`` what it was generated from (None: unconditioned)."""
+
+    joints: list[np.ndarray]
+    features: list[np.ndarray]
+    prompts: list[str | None]
+    fps: float
+    skeleton: Skeleton
+    representation: Representation = field(repr=False)
+    info: dict = field(default_factory=dict)  # how they were made (model, sampler, guidance, seed, edit settings)
+
+    def __len__(self) -> int:
+        return len(self.joints)
+
+    def seconds(self, i: int = 0) -> float:
+        return len(self.joints[i]) / self.fps
+
+    def save(self, folder: str | Path, formats=("bvh",)) -> list[dict]:
+        """Write each motion's joints and features (.npy) and the ``formats`` (bvh, mp4, gif, html) to ``folder``,
+        with results.json listing the files; returns its rows. The folder is created if needed."""
+        formats = parse_formats(list(formats) if not isinstance(formats, str) else formats)
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        rows = []
+        for i, (joints, feats, prompt) in enumerate(zip(self.joints, self.features, self.prompts, strict=True)):
+            stem = folder / _stem(prompt, i)
+            np.save(f"{stem}_joints.npy", joints.astype(np.float32))
+            np.save(f"{stem}_features.npy", feats.astype(np.float32))
+            exports = export_features(stem, self.representation, feats, self.fps, formats, title=prompt or "",
+                                      joints=self._changed(i))  # fmt: skip
+            rows.append({"prompt": prompt, "index": i, "frames": len(joints), "joints": f"{stem}_joints.npy",
+                         "features": f"{stem}_features.npy", "exports": exports})  # fmt: skip
+        (folder / "results.json").write_text(json.dumps({"info": self.info, "samples": rows}, indent=1, default=str))
+        return rows
+
+    def to_bvh(self, i: int = 0) -> str:
+        """The text of motion ``i`` as a BVH file (the model's rotations where it has them, else solved by IK)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(export_features(Path(tmp) / "motion", self.representation, self.features[i], self.fps,
+                                        ["bvh"], joints=self._changed(i))["bvh"])  # fmt: skip
+            return path.read_text()
+
+    def show(self, i: int = 0):
+        """An interactive 3D view of motion ``i`` for a notebook (an IPython HTML object; its HTML in plain Python)."""
+        from motiondiff.export.html_viewer import export_html
+
+        with tempfile.TemporaryDirectory() as tmp:
+            html = export_html(Path(tmp) / "motion.html", self.joints[i], self.skeleton, self.fps,
+                               title=self.prompts[i] or "").read_text()  # fmt: skip
+        try:
+            from IPython.display import HTML
+        except ImportError:
+            return html
+        return HTML(html)
+
+    def _changed(self, i: int) -> np.ndarray | None:
+        """The joints when they are not the features decoded as they are (smoothed or edited after decoding)."""
+        return self.joints[i] if self.info.get("joints_changed") else None

@@ -1,0 +1,129 @@
+"""The package's dependency direction (see docs/architecture.md): nothing outside `motiondiff.cli` imports it, the
+library never imports the user-facing pipelines from below them, and no two modules import each other, directly or
+around a loop. Imports are read from the source (every `import`, also inside functions), so a test import cannot
+hide one."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[2] / "src"
+PACKAGE = SRC / "motiondiff"
+
+# the two top layers and who may import them: the CLI only itself; the pipelines the CLI and themselves
+ALLOWED_ABOVE = {
+    "motiondiff.cli": ("motiondiff.cli",),
+    "motiondiff.pipelines": ("motiondiff.cli", "motiondiff.pipelines"),
+}
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def imports_of(path: Path) -> set[str]:
+    """Every motiondiff module a file imports (`from a.b import c` counts a.b and, when it is a module, a.b.c)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    name = module_name(path)
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                base = ".".join(anchor + ([base] if base else []))
+            found.add(base)
+            found.update(f"{base}.{a.name}" for a in node.names)
+    return {m for m in found if m.startswith("motiondiff")}
+
+
+def graph() -> dict[str, set[str]]:
+    files = {module_name(p): p for p in PACKAGE.rglob("*.py")}
+    edges = {}
+    for name, path in files.items():
+        edges[name] = {m for m in imports_of(path) if m in files and m != name}
+    return edges
+
+
+def _layer_violations(edges) -> list[str]:
+    bad = []
+    for src, targets in edges.items():
+        for dst in targets:
+            for top, allowed in ALLOWED_ABOVE.items():
+                if (dst == top or dst.startswith(top + ".")) and not any(
+                    src == a or src.startswith(a + ".") for a in allowed
+                ):
+                    bad.append(f"{src} imports {dst}")
+    return sorted(bad)
+
+
+def _cycles(edges) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in edges.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in list(edges):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_nothing_below_imports_the_cli_or_the_pipelines():
+    bad = _layer_violations(graph())
+    assert not bad, "imports that point up the layers:\n" + "\n".join(bad)
+
+
+def test_no_import_cycles():
+    cycles = _cycles(graph())
+    assert not cycles, "modules that import each other (directly or around a loop):\n" + "\n".join(map(str, cycles))
+
+
+@pytest.mark.parametrize(
+    "extra, expect",
+    [
+        ({"motiondiff.eval.metrics": {"motiondiff.cli.common"}}, "layers"),
+        (
+            {"motiondiff.data.clip": {"motiondiff.eval.metrics"}, "motiondiff.eval.metrics": {"motiondiff.data.clip"}},
+            "cycle",
+        ),
+    ],
+)
+def test_the_checks_fail_on_a_planted_violation(extra, expect):
+    edges = {k: set(v) for k, v in graph().items()}
+    for k, v in extra.items():
+        edges.setdefault(k, set()).update(v)
+    if expect == "layers":
+        assert _layer_violations(edges)
+    else:
+        assert any("motiondiff.data.clip" in c for c in _cycles(edges))

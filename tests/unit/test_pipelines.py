@@ -1,0 +1,98 @@
+"""The pipeline API with the released models: generate, edit, chain, save and export, and one clear error for each
+kind of bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from motiondiff.data.bvh import read_bvh
+from motiondiff.errors import UsageError
+from motiondiff.pipelines import MotionOutput, MotionPipeline
+
+CLIP = "test:dataset-1_walk_active_001"
+
+
+@pytest.fixture(scope="module")
+def pipe():
+    return MotionPipeline.from_pretrained("text")
+
+
+def test_text_to_motion_and_reproducible_seeds(pipe):
+    out = pipe(["a person walks forward", "a person waves"], seconds=[2, 3], num_samples=2, steps=5, seed=1)
+    assert isinstance(out, MotionOutput) and len(out) == 4 and out.fps == pipe.fps == 20
+    assert [len(j) for j in out.joints] == [40, 40, 60, 60] and out.joints[0].shape[1:] == (22, 3)
+    assert out.prompts == ["a person walks forward"] * 2 + ["a person waves"] * 2
+    assert np.isfinite(np.concatenate([j.reshape(-1) for j in out.joints])).all()
+    again = pipe(["a person walks forward", "a person waves"], seconds=[2, 3], num_samples=2, steps=5, seed=1)
+    assert all(np.array_equal(a, b) for a, b in zip(out.joints, again.joints, strict=True))
+    assert not np.array_equal(out.joints[0], out.joints[1])  # two samples of one prompt differ
+    assert out.info["steps"] == 5 and out.info["guidance"] == pipe.model.default_guidance
+
+
+def test_save_and_export(pipe, tmp_path):
+    out = pipe("a person walks forward", seconds=2, steps=3)
+    rows = out.save(tmp_path / "walk", formats=["bvh", "html"])
+    assert np.load(rows[0]["joints"]).shape == (40, 22, 3)
+    assert read_bvh(rows[0]["exports"]["bvh"]).num_frames == 40
+    assert (tmp_path / "walk" / "results.json").is_file() and rows[0]["exports"]["html"].endswith(".html")
+    assert json.loads((tmp_path / "walk" / "results.json").read_text())["samples"][0]["prompt"] == out.prompts[0]
+    shown = out.show()
+    assert out.to_bvh().startswith("HIERARCHY") and "<html" in getattr(shown, "data", shown).lower()
+
+
+def test_editing_keeps_what_it_should(pipe):
+    middle = pipe.inbetween(CLIP, "a person jumps", steps=5)
+    kept = middle.info["prefix_frames"][0]
+    assert kept > 0 and middle.info["kind"] == "inbetween"
+    parts = pipe.edit_parts(CLIP, "a person raises both hands", parts="upper_body", steps=5)
+    assert "l_hip" in parts.info["kept_joints"] and "l_wrist" not in parts.info["kept_joints"]
+    made = pipe("a person walks forward", seconds=3, steps=3)
+    again = pipe.inbetween(made, "a person waves", steps=3)  # a motion it made can be edited too
+    assert len(again.joints[0]) >= 50
+
+
+def test_long_motion_through_prompts_in_order(pipe):
+    long = pipe.long(["a person walks forward:3", "a person waves:2"], steps=3)
+    assert len(long.joints[0]) == 100 and [s["label"] for s in long.info["segments"]] == [
+        "a person walks forward",
+        "a person waves",
+    ]
+
+
+def test_action_model_takes_action_names():
+    pipe = MotionPipeline.from_pretrained("action")
+    out = pipe(pipe.actions[:2], seconds=1, steps=3)
+    assert out.prompts == pipe.actions[:2] and pipe.condition_kind == "action"
+    with pytest.raises(UsageError, match="unknown action 'fly'"):
+        pipe("fly")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"prompt": ""}, "text is empty"),
+        ({"prompt": "walk", "seconds": 60}, "seconds must be between"),
+        ({"prompt": "walk", "seconds": float("nan")}, "seconds must be a number"),
+        ({"prompt": "walk", "num_samples": 0}, "num_samples"),
+        ({"prompt": "walk", "guidance": -1}, "guidance"),
+        ({"prompt": "walk", "steps": 5000}, "steps must be"),
+        ({"prompt": "walk", "sampler": "euler"}, "sampler"),
+        ({"prompt": ["a", "b"], "seconds": [1, 2, 3]}, "one per prompt"),
+    ],
+)
+def test_bad_input_is_one_clear_error(pipe, kwargs, message):
+    prompt = kwargs.pop("prompt")
+    with pytest.raises(UsageError, match=message):
+        pipe(prompt, **kwargs)
+
+
+def test_unknown_model_and_edit_inputs_name_the_fix(pipe, tmp_path):
+    with pytest.raises(UsageError, match="released model"):
+        MotionPipeline.from_pretrained("no_such_model")
+    with pytest.raises(UsageError, match="not found"):
+        pipe.inbetween(tmp_path / "missing.bvh")
+    with pytest.raises(UsageError, match="whole body"):
+        pipe.edit_parts(CLIP, "a person waves", parts=list(range(22)))
