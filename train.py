@@ -1,20 +1,6 @@
 """Train a motion diffusion model: python train.py [backbone=... dataset=... condition=... model=paper ...]"""
 
-import hydra
-
-from motiondiff.cli.common import quiet_tool_caches, register_resolvers, user_errors
-
-register_resolvers()
-quiet_tool_caches()
-
-
-@hydra.main(version_base="1.3", config_path="conf", config_name="train")
-@user_errors
-def main(cfg):
-    from motiondiff.cli.train import run
-
-    run(cfg)
-
+from motiondiff.cli.entry import train
 
 if __name__ == "__main__":
-    main()
+    train()

@@ -1,5 +1,10 @@
-"""Where the project's own files are: the source checkout, the released models (`checkpoint=shipped`), and the
-checkpoints a user names (`find_checkpoint`: a path, shipped, latest or best)."""
+"""Where the project's files are: its configs, released models and evaluators and the embedded data (`REPO_DIR`),
+where a run writes (`WORK_DIR`), and the checkpoints a user names (`find_checkpoint`: a path, shipped, latest or
+best).
+
+From a source checkout both are the checkout. An installed wheel carries the configs, checkpoints and data in
+motiondiff/_bundled/ (see setup.py); then runs write under the current folder.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +12,18 @@ from pathlib import Path
 
 from motiondiff.errors import UsageError
 
-REPO_DIR = Path(__file__).resolve().parents[2]
+PACKAGE_DIR = Path(__file__).resolve().parent
+BUNDLED_DIR = PACKAGE_DIR / "_bundled"
+INSTALLED = (BUNDLED_DIR / "conf").is_dir()
+REPO_DIR = BUNDLED_DIR if INSTALLED else PACKAGE_DIR.parents[1]  # conf/, checkpoints/, data/
+CONF_DIR = REPO_DIR / "conf"
+
+
+def work_dir() -> Path:
+    """Where outputs/ and .cache/ go: the checkout, or the current folder for an installed package."""
+    return Path.cwd() if INSTALLED else REPO_DIR
+
+
 # checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
 SHIPPED_MODELS = {
     "text": REPO_DIR / "checkpoints" / "models" / "bandai_mini_text_cpu.safetensors",

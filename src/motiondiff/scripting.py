@@ -11,12 +11,14 @@ from pathlib import Path
 from omegaconf import DictConfig, OmegaConf
 
 from motiondiff.errors import UsageError
-from motiondiff.paths import REPO_DIR
+from motiondiff.paths import REPO_DIR, work_dir
 
 
 def register_resolvers() -> None:
     if not OmegaConf.has_resolver("repo_dir"):
         OmegaConf.register_new_resolver("repo_dir", lambda: str(REPO_DIR))
+    if not OmegaConf.has_resolver("work_dir"):
+        OmegaConf.register_new_resolver("work_dir", lambda: str(work_dir()))
     if not OmegaConf.has_resolver("fast_cpu_precision"):
         from motiondiff.hardware import fast_cpu_precision
 
@@ -25,7 +27,7 @@ def register_resolvers() -> None:
 
 def quiet_tool_caches() -> None:
     """Offline defaults and project-local caches for W&B, matplotlib and Hugging Face (never the user's home)."""
-    cache = Path(os.environ.get("MOTIONDIFF_CACHE_DIR", REPO_DIR / ".cache" / "motiondiff"))
+    cache = Path(os.environ.get("MOTIONDIFF_CACHE_DIR", work_dir() / ".cache" / "motiondiff"))
     os.environ.setdefault("WANDB_MODE", "offline")
     os.environ.setdefault("WANDB_SILENT", "true")
     os.environ.setdefault("WANDB_CACHE_DIR", str(cache / "wandb"))
@@ -69,3 +71,17 @@ def to_dict(cfg: DictConfig | dict | None) -> dict | None:
     if isinstance(cfg, DictConfig):
         return OmegaConf.to_container(cfg, resolve=True)  # type: ignore[return-value]
     return dict(cfg)
+
+
+def run_hydra(config_name: str, run) -> None:
+    """One Hydra run of ``run(cfg)`` with the project's config ``config_name`` (command line overrides from
+    sys.argv), after the resolvers and tool caches are set; user errors become one line and exit code 2."""
+    import hydra
+
+    from motiondiff.paths import CONF_DIR
+
+    register_resolvers()
+    quiet_tool_caches()
+    if not any(a.startswith("hydra.job.name=") for a in sys.argv[1:]):  # log files named after the command
+        sys.argv.append(f"hydra.job.name={config_name}")
+    hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name=config_name)(user_errors(run))()

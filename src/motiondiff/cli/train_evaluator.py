@@ -174,15 +174,8 @@ def run(cfg: DictConfig) -> Path:
     return out
 
 
-if (
-    __name__ == "__main__"
-):  # python -m motiondiff.cli.train_evaluator dataset=<name> [evaluator_model=paper] [which=[...]]
-    import hydra
+# python -m motiondiff.cli.train_evaluator dataset=<name> [evaluator_model=paper] [which=[...]]
+if __name__ == "__main__":
+    from motiondiff.scripting import run_hydra
 
-    from motiondiff.scripting import quiet_tool_caches, register_resolvers, user_errors
-
-    register_resolvers()
-    quiet_tool_caches()
-    hydra.main(version_base="1.3", config_path=str(REPO_DIR / "conf"), config_name="train_evaluator")(
-        user_errors(run)
-    )()
+    run_hydra("train_evaluator", run)

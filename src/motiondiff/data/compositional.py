@@ -307,7 +307,8 @@ def main(argv: list[str] | None = None) -> int:
         )
         return 2
     counts = {"train": int(args.get("train", 64)), "val": int(args.get("val", 16)), "test": int(args.get("test", 64))}
-    repo = Path(__file__).resolve().parents[3]
+    from motiondiff.paths import REPO_DIR as repo
+
     try:
         report = build(args.get("src", repo / "data" / "bandai_mini"), args["out"], counts, int(args.get("seed", 0)),
                        float(args.get("transition_s", 0.4)), int(args.get("max_frames", 196)),

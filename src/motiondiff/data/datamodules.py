@@ -444,4 +444,6 @@ class BVHDataModule(PreparedDataModule):
 
 def embedded_data_root() -> Path:
     """data/bandai_mini of the source checkout: the small real dataset the project ships."""
-    return Path(__file__).resolve().parents[3] / "data" / "bandai_mini"
+    from motiondiff.paths import REPO_DIR
+
+    return REPO_DIR / "data" / "bandai_mini"

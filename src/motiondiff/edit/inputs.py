@@ -14,14 +14,13 @@ import numpy as np
 from omegaconf import OmegaConf
 
 from motiondiff.data.clip import ClipMotion
-from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.features import canonicalize_joints, ground_and_face, skeleton_for_dim
 from motiondiff.data.representations import Representation
 from motiondiff.edit.canonical import carries_placement, placement, to_canonical
 from motiondiff.edit.masks import EditError
+from motiondiff.paths import REPO_DIR, work_dir
 from motiondiff.skeleton import Skeleton, get_skeleton
 
-REPO_DIR = embedded_data_root().parents[1]
 MIN_INPUT_FRAMES = 4  # at least a kept frame on each side of a gap and something to generate
 SPLIT_ORDER = ("test", "val", "train")  # where a bare clip id is looked up, in this order
 
@@ -252,7 +251,7 @@ def training_data_root(module, data_dir: str | os.PathLike | None = None, cache_
     if not name:
         return None
     data_dir = Path(data_dir or os.environ.get("MOTIONDIFF_DATA_DIR", REPO_DIR / "data"))
-    cache_dir = Path(cache_dir or os.environ.get("MOTIONDIFF_CACHE_DIR", REPO_DIR / ".cache" / "motiondiff"))
+    cache_dir = Path(cache_dir or os.environ.get("MOTIONDIFF_CACHE_DIR", work_dir() / ".cache" / "motiondiff"))
     conf = REPO_DIR / "conf" / "dataset" / f"{name}.yaml"
     if not conf.is_file():
         return data_dir / name

@@ -20,8 +20,9 @@ import numpy as np
 import torch
 
 from motiondiff.eval import action_table, report
+from motiondiff.paths import REPO_DIR
 
-PARAPHRASES = Path(__file__).resolve().parents[3] / "data" / "paraphrases" / "bandai_human.json"
+PARAPHRASES = REPO_DIR / "data" / "paraphrases" / "bandai_human.json"
 
 
 def load_descriptions(spec: str) -> list[dict]:
@@ -78,10 +79,10 @@ def main(argv: list[str]) -> None:
     from motiondiff.eval.behaviour import sampling_args
     from motiondiff.eval.protocol import Evaluators
     from motiondiff.lit.loading import load_model as load_module
-    from motiondiff.paths import REPO_DIR, find_checkpoint
+    from motiondiff.paths import REPO_DIR, find_checkpoint, work_dir
 
     args = dict(a.split("=", 1) for a in argv)
-    outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
+    outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))
     ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
     module = load_module(ckpt)
     if module.condition_kind != "text":

@@ -22,6 +22,7 @@ from omegaconf import OmegaConf
 
 from motiondiff.data.captions import measure
 from motiondiff.data.features import joints_from_features
+from motiondiff.paths import CONF_DIR
 
 # prompt, seconds, dataset label of the real clips it should resemble
 DEFAULT_PROMPTS = (
@@ -32,7 +33,6 @@ DEFAULT_PROMPTS = (
     ("a person kicks", 3.0, "kick"),
     ("a person bows", 3.0, "bow"),
 )
-CONF_DIR = Path(__file__).resolve().parents[3] / "conf"
 
 
 def default_sampler(conf_dir: Path = CONF_DIR) -> dict:
@@ -206,10 +206,10 @@ def main(argv: list[str]) -> None:
     from motiondiff.eval import action_table
     from motiondiff.eval.protocol import Evaluators
     from motiondiff.lit.loading import load_model as load_module
-    from motiondiff.paths import REPO_DIR, find_checkpoint
+    from motiondiff.paths import REPO_DIR, find_checkpoint, work_dir
 
     args = dict(a.split("=", 1) for a in argv)
-    outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
+    outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))
     ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
     module = load_module(ckpt)
     dataset = module.hparams.get("dataset") or "bandai_mini"
