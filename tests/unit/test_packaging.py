@@ -26,11 +26,24 @@ def test_wheel_bundles_configs_models_data_and_commands(tmp_path):
     wheel = next(tmp_path.glob("motiondiff-*.whl"))
     names = set(zipfile.ZipFile(wheel).namelist())
     bundled = "motiondiff/_bundled/"
-    for needed in ("conf/sample.yaml", "conf/paths/default.yaml", "checkpoints/models/bandai_mini_text_cpu.safetensors",
-                   "checkpoints/evaluators/bandai_mini/text_motion.safetensors", "data/bandai_mini/meta.json"):
+    for needed in (
+        "conf/sample.yaml",
+        "conf/paths/default.yaml",
+        "checkpoints/models/bandai_mini_text_cpu.safetensors",
+        "checkpoints/evaluators/bandai_mini/text_motion.safetensors",
+        "data/bandai_mini/meta.json",
+    ):
         assert bundled + needed in names, needed
-    assert "motiondiff/pipelines/__init__.py" in names and not any(n.startswith(bundled + "data/bandai/") for n in names)
+    assert "motiondiff/pipelines/__init__.py" in names and not any(
+        n.startswith(bundled + "data/bandai/") for n in names
+    )
     entry_points = next(n for n in names if n.endswith("entry_points.txt"))
     text = zipfile.ZipFile(wheel).read(entry_points).decode()
-    for command in ("motiondiff-train", "motiondiff-sample", "motiondiff-edit", "motiondiff-evaluate", "motiondiff-prepare"):
+    for command in (
+        "motiondiff-train",
+        "motiondiff-sample",
+        "motiondiff-edit",
+        "motiondiff-evaluate",
+        "motiondiff-prepare",
+    ):
         assert command in text
