@@ -83,18 +83,25 @@ def test_evaluation_off_alone_trains_without_a_best_fid_checkpoint(tmp_path):
     assert "no best-FID checkpoint either" in proc.stdout + proc.stderr
 
 
-@pytest.mark.slow
 def test_unconstrained_jp_model_with_smoothing_reports_its_own_feature_smoothness(tmp_path):
     """vvMDM's setting on the embedded data: an unconditioned jp model, the Gaussian filter in evaluation and the
-    smoothness of its own (joint-position) features beside the HumanML3D-bridge one."""
-    run_cli("train.py", *TINY, "condition=none", "representation=jp", "trainer.max_steps=2", "checkpoint_every=2",
-            env_dir=tmp_path)  # fmt: skip
-    ckpt = next((tmp_path / "outputs").glob("train/*/checkpoints/last.ckpt"))
-    run_cli("evaluate.py", f"checkpoint={ckpt}", "replications=1", "mm_replications=0", "steps=2", "wandb=false",
-            "smooth_sigma=2", env_dir=tmp_path)  # fmt: skip
-    run = next((tmp_path / "outputs").glob("evaluate/*"))
-    metrics = json.loads((run / "metrics.json").read_text())
+    smoothness of its own (joint-position) features beside the HumanML3D-bridge one (evaluate.py's report, in-process
+    with an untrained tiny model: the columns, not the numbers, are under test)."""
+    from fixtures.tiny_models import tiny_datamodule, tiny_module
+    from hydra import compose, initialize_config_dir
+
+    from motiondiff.cli.evaluate import report_evaluation
+    from motiondiff.paths import CONF_DIR
+
+    dm = tiny_datamodule(representation="jp")
+    module = tiny_module(dm, ("condition=none", "representation=jp"))
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose("evaluate", overrides=["replications=1", "mm_replications=0", "steps=2", "wandb=false",
+                                             "smooth_sigma=2", "precision=32-true"])  # fmt: skip
+    report_evaluation(cfg, module, dm, tmp_path, "tiny jp model")
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["smooth_sigma"] == 2 and "smoothness_own" in metrics["summary"]
     assert (
-        0 < metrics["real"]["smoothness_own"][0] <= 1 and "Smoothness (own features)" in (run / "table.md").read_text()
+        0 < metrics["real"]["smoothness_own"][0] <= 1
+        and "Smoothness (own features)" in (tmp_path / "table.md").read_text()
     )

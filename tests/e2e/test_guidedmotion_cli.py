@@ -59,21 +59,22 @@ def test_sample_guidedmotion_with_generated_local_actions_and_weights(latent_ckp
     assert joints.shape[0] == 60 and np.isfinite(joints).all()
 
 
-@pytest.mark.parametrize(
-    ("overrides", "message"),
-    [
-        (["local_weights=[1]"], "one per action"),
-        (["local_actions=[walks forward]"], "give one per action"),
-        (["level_steps=[3,3]"], "level_steps must be three"),
-        (["local_choice=4"], "candidate index"),
-    ],
-)
-def test_bad_local_action_input_is_one_clear_error(latent_ckpt, overrides, message):
+def test_bad_local_action_input_is_one_clear_error(latent_ckpt):
+    """Through sample.py: exit code 2 and one line; the other checks through the same code in-process."""
+    from motiondiff.errors import UsageError
+    from motiondiff.pipelines import GuidedMotionPipeline
+
     work, ckpt = latent_ckpt
     proc = run_cli("sample.py", "method=guidedmotion", f"checkpoint={ckpt}", f"text='{CAPTION}'", "length=2",
-                   "level_steps=[2,2,2]", "export=none", *overrides, env_dir=work, check=False)  # fmt: skip
+                   "level_steps=[2,2,2]", "export=none", "local_weights=[1]", env_dir=work, check=False)  # fmt: skip
     assert proc.returncode == 2, proc.stderr[-2000:]
-    assert message in proc.stderr and "Traceback" not in proc.stderr
+    assert "one per action" in proc.stderr and "Traceback" not in proc.stderr
+    pipe = GuidedMotionPipeline.from_pretrained(ckpt, local_model="text")
+    for kwargs, message in [({"local_actions": ["walks forward"]}, "give one per action"),
+                            ({"level_steps": (3, 3)}, "level_steps must be three"),
+                            ({"local_choice": 4}, "candidate index")]:  # fmt: skip
+        with pytest.raises(UsageError, match=message):
+            pipe(CAPTION, seconds=2, **{"level_steps": (2, 2, 2), **kwargs})
 
 
 def test_comparison_with_mdm_and_the_level_ablation_writes_every_row(latent_ckpt):

@@ -60,8 +60,14 @@ def test_action_datasets_with_the_official_classifiers(shared, tmp_path, dataset
     assert ("FID (train)" in table) == (dataset == "uestc") and ("fid_train" in metrics) == (dataset == "uestc")
 
 
-def test_official_without_a_folder_names_the_layout(text_ckpt, tmp_path):
-    proc = run_cli("evaluate.py", f"checkpoint={text_ckpt}", "evaluator=official", *FAST_EVAL, env_dir=tmp_path,
-                   check=False)  # fmt: skip
-    err = proc.stdout + proc.stderr
-    assert proc.returncode != 0 and "official_dir" in err and "finest.tar" in err and "Traceback" not in err
+def test_official_without_a_folder_names_the_layout(text_ckpt):
+    from omegaconf import OmegaConf
+
+    from motiondiff.cli.evaluate import load_evaluators
+    from motiondiff.errors import UsageError
+    from motiondiff.lit.loading import load_model
+
+    cfg = OmegaConf.create({"evaluator": "official", "official_dir": None, "dataset": {"name": "bandai_mini"}})
+    with pytest.raises(UsageError, match="official_dir=<folder>") as err:
+        load_evaluators(cfg, load_model(text_ckpt), None)
+    assert "finest.tar" in str(err.value)

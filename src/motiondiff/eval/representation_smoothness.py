@@ -24,10 +24,12 @@ ORDER = ("jp", "rp6jr", "rpqjr", "rpajr", "rpejr", "rpmjr", "hml263")  # vvMDM F
 OUT = Path(__file__).resolve().parents[3] / "docs" / "results" / "representation_smoothness"
 
 
-def representation_smoothness(root: str | Path, split: str = "train", alpha: float = 1.0) -> dict[str, dict]:
+def representation_smoothness(
+    root: str | Path, split: str = "train", alpha: float = 1.0, names=ORDER
+) -> dict[str, dict]:
     """{representation: {"mean": average over clips, "std": spread over clips, "clips": count, "dims": D}}."""
     out = {}
-    for name in ORDER:
+    for name in names:
         dm = PreparedDataModule(root, batch_size=8, representation=name)
         records = dm.dataset(split).records
         scores = np.array([smoothness(r.motion, alpha) for r in records if len(r.motion) >= 3])

@@ -178,9 +178,15 @@ class MotionPipeline:
         )
 
     def _input(self, motion) -> InputMotion:
-        if isinstance(motion, MotionOutput):
-            with _TempNpy(motion.joints[0]) as path:
-                return self._load(path)
+        if isinstance(motion, MotionOutput):  # its own features, as made (canonical placement, any representation)
+            if motion.representation.name != self.model.representation.name:
+                raise UsageError(f"this motion is in {motion.representation.name} features; the model edits "
+                                 f"{self.model.representation.name}: save it as joints (.npy) or BVH and edit that file")  # fmt: skip
+            n = min(len(motion.features[0]), int(self.model.hparams.max_frames))
+            feats = np.asarray(motion.features[0][:n], dtype=np.float32)
+            joints = self.model.representation.decode_numpy(feats)
+            return InputMotion(feats, joints, "generated", self.fps, (0, n), len(motion.features[0]),
+                               captions=[motion.prompts[0]] if motion.prompts[0] else [])  # fmt: skip
         return self._load(motion)
 
     def _load(self, source) -> InputMotion:
@@ -275,20 +281,3 @@ def _complement_parts(skeleton, parts) -> list[int]:
     if not kept:
         raise EditError(f"{parts!r} is the whole body: generate a new motion with the pipeline's call instead")
     return kept
-
-
-class _TempNpy:
-    """A joints array as a temporary .npy file, for the editing loaders that read files."""
-
-    def __init__(self, joints: np.ndarray):
-        import tempfile
-
-        self.dir = tempfile.TemporaryDirectory()
-        self.path = Path(self.dir.name) / "motion.npy"
-        np.save(self.path, np.asarray(joints, dtype=np.float32))
-
-    def __enter__(self) -> Path:
-        return self.path
-
-    def __exit__(self, *exc) -> None:
-        self.dir.cleanup()
