@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import pickle
-import re
 
 import numpy as np
 import pytest
 import torch
+from fixtures.official_layouts import layout_shapes, write_glove
 
 from motiondiff.eval.evaluators import (
     ActionClassifierGRU,
@@ -38,37 +38,14 @@ def test_official_action_classifier_reproduces_reference(shared):
     assert features.shape == (4, 30) and logits.shape == (4, 12)
 
 
-def _layout_shapes(text: str) -> dict[str, dict[str, tuple[int, ...]]]:
-    """{module: {key: shape}} from the official evaluator's state-dict layout file."""
-    out: dict[str, dict] = {}
-    current = None
-    for line in text.splitlines():
-        head = re.match(r"## (\w+)", line)
-        if head:
-            current = out.setdefault(head.group(1), {})
-            continue
-        row = re.match(r"^([\w.]+)\t\(([\d, ]+)\)$", line)
-        if row and current is not None:
-            current[row.group(1)] = tuple(int(x) for x in row.group(2).split(",") if x.strip())
-    return out
-
-
-def _fake_glove(folder, words: list[str], dim: int = 300) -> np.ndarray:
-    vectors = np.random.default_rng(0).normal(size=(len(words), dim)).astype(np.float32)
-    np.save(folder / "our_vab_data.npy", vectors)
-    with open(folder / "our_vab_idx.pkl", "wb") as f:
-        pickle.dump({w: i for i, w in enumerate(words)}, f)
-    return vectors
-
-
 def test_official_t2m_state_dict_loads_strictly(shared, tmp_path):
-    layout = _layout_shapes(shared("reference", "t2m_evaluator_state_dict_layout.txt").read_text())
+    layout = layout_shapes(shared("reference", "t2m_evaluator_state_dict_layout.txt").read_text())
     assert set(layout) == {"movement_encoder", "text_encoder", "motion_encoder"}
     gen = torch.Generator().manual_seed(0)
     state = {name: {k: torch.randn(shape, generator=gen) for k, shape in keys.items()} for name, keys in layout.items()}
     torch.save({**state, "epoch": 10, "it": 1000}, tmp_path / "finest.tar")
     words = ["sos", "eos", "unk", "person", "walk", "forward"]
-    vectors = _fake_glove(tmp_path, words)
+    vectors = write_glove(tmp_path, words)
     np.save(tmp_path / "mean.npy", np.zeros(263, np.float32))
     np.save(tmp_path / "std.npy", np.full(263, 2.0, np.float32))
     model = load_official_t2m_evaluator(tmp_path / "finest.tar", tmp_path, tmp_path / "mean.npy", tmp_path / "std.npy")
@@ -93,7 +70,7 @@ def test_official_t2m_state_dict_loads_strictly(shared, tmp_path):
 
 def test_glove_loader_refuses_pickled_code(tmp_path):
     words = ["sos", "eos", "unk", "walk"]
-    _fake_glove(tmp_path, words)
+    write_glove(tmp_path, words)
     vocab, vectors = load_glove(tmp_path)
     assert vocab.words == words and vectors.shape == (4, 300)
 

@@ -130,7 +130,7 @@ class MotionPipeline:
         texts, secs = [], []
         for item, s in zip(prompts, self._per_prompt(seconds, len(prompts), "seconds"), strict=True):
             text, _, timed = str(item).rpartition(":") if _is_timed(item) else (item, "", "")
-            texts.append(self._check_prompt(text))
+            texts.append(check_text(text))
             secs.append(float(timed) if timed else float(s))
         n = self._count(num_samples)
         generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
@@ -210,10 +210,7 @@ class MotionPipeline:
             return items
         if kind == "action":
             return [self._check_action(p) for p in items]
-        return [self._check_prompt(p) for p in items]
-
-    def _check_prompt(self, text) -> str:
-        return check_text(text)
+        return [check_text(p) for p in items]
 
     def _check_action(self, action):
         names = self.actions
