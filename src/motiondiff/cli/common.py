@@ -9,6 +9,7 @@ from omegaconf import DictConfig
 
 from motiondiff.errors import UsageError  # noqa: F401  (re-exported: the CLI's error type)
 from motiondiff.lit.conditions import text_encoder_kwargs  # noqa: F401
+from motiondiff.lit.generation import fitted_steps
 from motiondiff.paths import RELEASE_SUFFIXES, REPO_DIR, SHIPPED_MODEL, SHIPPED_MODELS, find_checkpoint  # noqa: F401
 from motiondiff.scripting import (  # noqa: F401
     key_value_args,
@@ -36,16 +37,8 @@ def trainer_parts(cfg: DictConfig) -> tuple[list, list]:
 
 
 def sampling_steps(cfg: DictConfig, module) -> int | None:
-    """The sampling steps to run: ``steps=`` as given (it must fit the model's T diffusion steps), else the sampler's
-    default capped at T, so a model trained with few steps (MDM Tab. 6, T = 10) samples with DDIM over its whole
-    chain instead of failing on DDIM-50. None: every step of the chain (DDPM's default)."""
-    num_steps = int(module.diffusion.num_steps)
-    if cfg.steps is not None:
-        if not 1 <= int(cfg.steps) <= num_steps:
-            raise UsageError(f"steps must be between 1 and the model's {num_steps} diffusion steps, got {cfg.steps}")
-        return int(cfg.steps)
-    default = cfg.sampler.steps
-    return None if default is None else min(int(default), num_steps)
+    """``steps=`` (or the sampler's default) fitted to the model's diffusion steps (``lit.generation.fitted_steps``)."""
+    return fitted_steps(module, None if cfg.steps is None else int(cfg.steps), cfg.sampler.steps)
 
 
 def apply_clip_x0(cfg: DictConfig, module) -> str | None:

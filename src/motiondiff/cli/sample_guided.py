@@ -33,16 +33,13 @@ def _choice(value) -> int | list[int]:
 
 def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, int]:
     """Steps per level: level_steps=[m, a, s] (e.g. the paper's [15, 15, 20]), else steps= for each, else the
-    model's defaults."""
+    model's defaults (checked by the pipeline's ``level_steps_of``)."""
+    from motiondiff.pipelines.guided import level_steps_of
+
     given = _list(cfg.get("level_steps"))
-    if given is None:
-        given = [cfg.steps] * 3 if cfg.steps is not None else None
-    if given is None:
-        return {**{level: 50 for level in LEVELS}, **dict((module.hparams.sampling or {}).get("steps", {}))}
-    if len(given) != 3 or any(not isinstance(s, int) or not 1 <= s <= module.diffusion.num_steps for s in given):
-        raise UsageError(f"level_steps must be three step counts in 1..{module.diffusion.num_steps} (motion, action, "
-                         f"specific), e.g. [15,15,20]; got {given}")  # fmt: skip
-    return dict(zip(LEVELS, given, strict=True))
+    if given is None and cfg.steps is not None:
+        given = [cfg.steps] * 3
+    return level_steps_of(module, given)
 
 
 def run(cfg: DictConfig) -> Path:

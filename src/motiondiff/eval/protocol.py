@@ -140,13 +140,15 @@ class Evaluators:
     def embed_motion(self, features: list[np.ndarray]) -> dict[str, np.ndarray]:
         """De-normalised features of clips -> {"text_motion": (C, E), "action_features": (C, F), "action_logits"}."""
         out: dict[str, list] = {}
-        own, features = features, self.as_hml(features)
+        reads_hml = self.text_motion is not None or (self.action is not None and self.action_reader is None)
+        hml = self.as_hml(features) if reads_hml else None  # an official reader alone needs no bridge
         for s in range(0, len(features), self.batch_size):
-            x, lengths = pad(features[s : s + self.batch_size])
+            if reads_hml:
+                x, lengths = pad(hml[s : s + self.batch_size])
             if self.text_motion is not None:
                 out.setdefault("text_motion", []).append(self.text_motion.encode_motion(x, lengths))
             if self.action_reader is not None:
-                logits, feats = self.action_reader(own[s : s + self.batch_size])
+                logits, feats = self.action_reader(features[s : s + self.batch_size])
             elif self.action is not None:
                 logits, feats = self.action(motion_input(self.action, x, self.num_joints), lengths)
             if self.action is not None:

@@ -10,7 +10,20 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import condition_batch
+
+
+def fitted_steps(module, steps, default: int | None) -> int | None:
+    """The sampling steps to run: ``steps`` as given (a whole number that fits the model's T diffusion steps), else
+    ``default`` capped at T, so a model trained with few steps (MDM Tab. 6, T = 10) samples with DDIM over its whole
+    chain instead of failing on DDIM-50. None: every step of the chain (DDPM's default)."""
+    num_steps = int(module.diffusion.num_steps)
+    if steps is not None:
+        if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= num_steps:
+            raise UsageError(f"steps must be between 1 and the model's {num_steps} diffusion steps, got {steps!r}")
+        return steps
+    return None if default is None else min(int(default), num_steps)
 
 
 @torch.inference_mode()

@@ -32,6 +32,19 @@ from motiondiff.pipelines.motion import resolve_model
 from motiondiff.pipelines.output import MotionOutput
 
 
+def level_steps_of(latent: HierarchicalLatentModule, level_steps=None) -> dict[str, int]:
+    """DDIM steps per level from (motion, action, specific) counts, e.g. the paper's (15, 15, 20); None: the
+    model's defaults (50 each unless its sampling settings say otherwise)."""
+    if level_steps is None:
+        return {**{level: 50 for level in LEVELS}, **dict((latent.hparams.sampling or {}).get("steps", {}))}
+    t = int(latent.diffusion.num_steps)
+    given = list(level_steps)
+    if len(given) != 3 or any(isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= t for s in given):
+        raise UsageError(f"level_steps must be three step counts in 1..{t} (motion, action, specific), "
+                         f"e.g. [15,15,20]; got {level_steps!r}")  # fmt: skip
+    return dict(zip(LEVELS, given, strict=True))
+
+
 class GuidedMotionPipeline:
     """A trained hierarchical latent model (train_latent.py) and the text model that makes its local actions."""
 
@@ -77,7 +90,7 @@ class GuidedMotionPipeline:
             raise UsageError(f"seconds must give 1..{max_frames} frames at {self.fps:g} fps, got {seconds!r}")
         if isinstance(num_samples, bool) or not isinstance(num_samples, int) or num_samples < 1:
             raise UsageError(f"num_samples must be a whole number >= 1, got {num_samples!r}")
-        steps = self._steps(level_steps)
+        steps = level_steps_of(self.latent, level_steps)
         generator = torch.Generator(device=self.latent.device).manual_seed(int(seed))
         try:
             _, described = local_descriptions(text)
@@ -100,16 +113,6 @@ class GuidedMotionPipeline:
                 "local_actions": [{"text": t, "source": s, "weight": w}
                                   for t, s, w in zip(local.texts, local.sources, weights, strict=True)]}  # fmt: skip
         return MotionOutput(joints, feats, [text] * num_samples, self.fps, rep.skeleton, rep, info)
-
-    def _steps(self, level_steps) -> dict[str, int]:
-        if level_steps is None:
-            return {**{level: 50 for level in LEVELS}, **dict((self.latent.hparams.sampling or {}).get("steps", {}))}
-        t = int(self.latent.diffusion.num_steps)
-        given = list(level_steps)
-        if len(given) != 3 or any(isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= t for s in given):
-            raise UsageError(f"level_steps must be three step counts in 1..{t} (motion, action, specific), "
-                             f"e.g. (15, 15, 20); got {level_steps!r}")  # fmt: skip
-        return dict(zip(LEVELS, given, strict=True))
 
     def _text_encoder(self):
         if self._encoder is None:

@@ -26,7 +26,7 @@ from motiondiff.edit.masks import EditError
 from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import check_text, repeated
-from motiondiff.lit.generation import generate_features
+from motiondiff.lit.generation import fitted_steps, generate_features
 from motiondiff.lit.loading import load_model
 from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
 from motiondiff.pipelines.output import MotionOutput
@@ -253,11 +253,7 @@ class MotionPipeline:
             raise UsageError(f"guidance must be a number >= 0, got {guidance!r}")
         if sampler not in ("ddim", "ddpm"):
             raise UsageError(f"sampler must be 'ddim' or 'ddpm', got {sampler!r}")
-        t = int(self.model.diffusion.num_steps)
-        if steps is None:
-            steps = min(50, t) if sampler == "ddim" else None
-        elif isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= t:
-            raise UsageError(f"steps must be a whole number in 1..{t} (this model's diffusion steps), got {steps!r}")
+        steps = fitted_steps(self.model, steps, 50 if sampler == "ddim" else None)
         return {"guidance": float(guidance), "sampler": sampler, "steps": steps, "eta": float(eta)}
 
 
