@@ -33,7 +33,7 @@ PROMPTS := [a person walks forward, a person raises both hands, a person runs, a
 train: setup allocator
 	$(WITH_TCMALLOC) $(PY) train.py experiment=cpu_quickstart
 	$(PY) sample.py "prompts=$(PROMPTS)" num_samples=2 length=4 export=mp4
-	$(PY) -m motiondiff.eval.behaviour num_samples=10
+	$(PY) -m motiondiff.studies.behaviour num_samples=10
 	@echo "checkpoint: $$(ls -t outputs/train/*/checkpoints/last.ckpt | head -1)"
 	@echo "samples:    $$(ls -td outputs/sample/*/ | head -1)"
 
@@ -90,7 +90,7 @@ guided-compare: setup allocator
 		"+trainer.max_time={seconds: $$($(PY) -c 'import json,sys; print(int(sum(json.load(open(f"$(GC)/{s}/run.json"))["train_seconds"] for s in sys.argv[1:])))' vae_motion vae_action vae_specific latent)}" \
 		hydra.run.dir=$(GC)/mdm
 	mdm=$$(ls $(GC)/mdm/checkpoints/best-fid-*.ckpt 2>/dev/null | head -1); \
-	$(PY) -m motiondiff.eval.guided_compare latent=$(GC)/latent/checkpoints/last.ckpt \
+	$(PY) -m motiondiff.studies.guided_compare latent=$(GC)/latent/checkpoints/last.ckpt \
 		mdm=$${mdm:-$(GC)/mdm/checkpoints/last.ckpt} replications=$(GC_REPLICATIONS) out=$(GC_OUT)
 
 lint: setup
@@ -104,13 +104,13 @@ format: setup
 # Rebuild the embedded dataset from the Bandai Namco zips (every content x style, two clips each where there are two, <= 4 s),
 # with the caption and split rules it was committed with (3 captions per clip, rare actions split like the rest).
 data: setup
-	$(PY) -m motiondiff.data.prepare bandai --src $(BANDAI)/bandai-ds1.zip --src $(BANDAI)/bandai-ds2.zip \
+	$(PY) -m motiondiff.data.preparing.prepare bandai --src $(BANDAI)/bandai-ds1.zip --src $(BANDAI)/bandai-ds2.zip \
 		--out data/bandai_mini --per-group 2 --max-frames 80 --compact --seed 0 --caption-variants 0 --rare-to-train 0 --force
 
 # The full Bandai Namco set (2,787 clips, ~450 MB, about 2 minutes) for dataset=bandai and experiment=bandai_text.
 data-full: setup
 	@test -f data/bandai/meta.json && echo "data/bandai is prepared (rm -r data/bandai to rebuild)" || \
-	$(PY) -m motiondiff.data.prepare bandai --src $(BANDAI)/bandai-ds1.zip --src $(BANDAI)/bandai-ds2.zip \
+	$(PY) -m motiondiff.data.preparing.prepare bandai --src $(BANDAI)/bandai-ds1.zip --src $(BANDAI)/bandai-ds2.zip \
 		--out data/bandai --seed 0 --held-out data/paraphrases/bandai_human.json
 
 lock: setup

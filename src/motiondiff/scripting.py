@@ -40,7 +40,7 @@ def quiet_tool_caches() -> None:
 
 def user_errors(fn):
     """Report user errors as one clear line instead of a traceback."""
-    from motiondiff.data.errors import DatasetNotFoundError, RepresentationError
+    from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):

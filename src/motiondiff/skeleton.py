@@ -342,7 +342,7 @@ KIT21 = Skeleton(
 SMPL24_NAMES = SMPL22_NAMES + ("l_hand", "r_hand")
 # Approximate rest offsets of the SMPL neutral template (metres; x body-left, y up, z forward), rounded from the
 # values EDGE publishes for its fixed SMPL skeleton. The SMPL model itself is licensed and not shipped; datasets
-# replace these with offsets recovered from their own joints (see motiondiff.data.smpl_clips).
+# replace these with offsets recovered from their own joints (see motiondiff.data.sources.smpl_clips).
 SMPL24_REST_OFFSETS = np.array(
     [[0.0, 0.0, 0.0], [0.0586, -0.0823, -0.0177], [-0.0603, -0.0905, -0.0135], [0.0044, 0.1244, -0.0384],
      [0.0435, -0.3865, 0.0080], [-0.0433, -0.3837, -0.0048], [0.0045, 0.1380, 0.0268], [-0.0148, -0.4269, -0.0374],

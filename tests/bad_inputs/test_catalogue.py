@@ -23,9 +23,9 @@ sys.path.insert(0, str(REPO / "tests" / "e2e"))
 from cli_helpers import write_kit_layout  # noqa: E402
 
 from motiondiff.cli.common import UsageError  # noqa: E402
-from motiondiff.data.bvh import BVHError, parse_bvh, read_bvh  # noqa: E402
-from motiondiff.data.errors import DatasetNotFoundError, RepresentationError  # noqa: E402
-from motiondiff.data.humanml3d import load_official_split  # noqa: E402
+from motiondiff.data.formats.bvh import BVHError, parse_bvh, read_bvh  # noqa: E402
+from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError  # noqa: E402
+from motiondiff.data.sources.humanml3d import load_official_split  # noqa: E402
 
 BVH = """HIERARCHY
 ROOT Hips
@@ -103,7 +103,7 @@ def _inf(a):
 
 def prepare(*args):
     def run(tmp):
-        cmd = [sys.executable, "-m", "motiondiff.data.prepare", *(a.format(tmp=tmp) for a in args)]
+        cmd = [sys.executable, "-m", "motiondiff.data.preparing.prepare", *(a.format(tmp=tmp) for a in args)]
         done = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp, timeout=120)
         if done.returncode:
             raise UsageError(done.stderr.strip().splitlines()[-1] if done.stderr.strip() else f"exit {done.returncode}")

@@ -1,6 +1,6 @@
 """edit.py end to end on a tiny trained model: in-betweening and body-part editing of a dataset clip, a BVH file and
 a joints .npy; the kept part is the input's (checked from the files written), bad input gets one clear line; and the
-acceptance run (python -m motiondiff.eval.editing) runs with small numbers."""
+acceptance run (python -m motiondiff.studies.editing) runs with small numbers."""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ from cli_helpers import REPO, run_cli
 from hydra import compose, initialize_config_dir
 
 from motiondiff.cli.common import UsageError, register_resolvers
-from motiondiff.data.bvh import motion_from_arrays, write_bvh
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.data.features import joints_from_features
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
+from motiondiff.data.formats.prepared import load_split
+from motiondiff.data.representations.hml_features import joints_from_features
 from motiondiff.skeleton import SMPL22
 
 register_resolvers()
@@ -166,14 +166,14 @@ def test_cli_prints_one_line_and_exits_2(text_ckpt, tmp_path):
 # ---- the acceptance measurements ----------------------------------------------------------------------------------
 @pytest.mark.parametrize("bad", ["hold_from=abc", "reconstruction=lots", "steps=many"])
 def test_editing_evaluation_names_a_bad_number(text_ckpt, bad):
-    from motiondiff.eval.editing import main
+    from motiondiff.studies.editing import main
 
     with pytest.raises(UsageError, match=bad.split("=")[0] + ".*number"):
         main([f"checkpoint={text_ckpt}", bad])
 
 
 def test_editing_evaluation_runs(text_ckpt, tmp_path):
-    from motiondiff.eval.editing import main
+    from motiondiff.studies.editing import main
 
     out = main([f"checkpoint={text_ckpt}", "num_edits=3", "num_part_edits=2", "steps=3", "hold_from=0.5",
                 "reconstruction=2", f"out={tmp_path}"])  # fmt: skip

@@ -78,7 +78,7 @@ def test_bad_local_action_input_is_one_clear_error(latent_ckpt):
 
 
 def test_comparison_with_mdm_and_the_level_ablation_writes_every_row(latent_ckpt):
-    from motiondiff.eval.guided_compare import ABLATION, main
+    from motiondiff.studies.guided_compare import ABLATION, main
 
     work, ckpt = latent_ckpt
     out = work / "comparison"
@@ -101,7 +101,7 @@ def test_comparison_with_mdm_and_the_level_ablation_writes_every_row(latent_ckpt
 
 
 def test_timing_only_writes_the_sampling_times_and_leaves_the_comparison_alone(latent_ckpt):
-    from motiondiff.eval.guided_compare import main
+    from motiondiff.studies.guided_compare import main
 
     work, ckpt = latent_ckpt
     out = work / "timing"
@@ -116,7 +116,7 @@ def test_timing_only_writes_the_sampling_times_and_leaves_the_comparison_alone(l
 
 
 def test_weight_control_report_measures_latent_and_decoded_distances(latent_ckpt):
-    from motiondiff.eval.weight_control import main
+    from motiondiff.studies.weight_control import main
 
     work, ckpt = latent_ckpt
     out = work / "weights"

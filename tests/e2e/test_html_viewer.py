@@ -15,7 +15,7 @@ import pytest
 from PIL import Image
 
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.export import export_html
 from motiondiff.skeleton import SMPL22
 

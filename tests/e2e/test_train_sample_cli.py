@@ -156,7 +156,7 @@ def test_kill_and_resume_ends_with_the_uninterrupted_weights(tmp_path):
 def test_shipped_model_samples_with_every_export(tmp_path):
     """checkpoint=shipped loads the released safetensors model (no training needed) and export= writes a BVH that
     reads back as the saved joints and a self-contained HTML viewer next to the arrays."""
-    from motiondiff.data.bvh import read_bvh
+    from motiondiff.data.formats.bvh import read_bvh
 
     run_cli("sample.py", "checkpoint=shipped", "text=a person walks forward", "num_samples=1", "length=1",
             "sampler.steps=3", "export=[bvh,html]", env_dir=tmp_path)  # fmt: skip

@@ -1,5 +1,5 @@
 """train_vae.py and the VAE level report end to end: a tiny VAE trains a few steps on the embedded data, writes its
-checkpoints and run.json, and `python -m motiondiff.eval.vae_levels` scores it; a bad level is one clear error."""
+checkpoints and run.json, and `python -m motiondiff.studies.vae_levels` scores it; a bad level is one clear error."""
 
 from __future__ import annotations
 
@@ -57,7 +57,7 @@ def test_vae_levels_report_scores_the_checkpoints(vae_run, tmp_path):
            "OMP_NUM_THREADS": "1"}  # fmt: skip
     # the same checkpoint for all three levels: the pipeline, not the training, is under test
     args = [f"{lv}={ckpt}" for lv in ("motion", "action", "specific")] + [f"out={out}", "replications=2"]
-    proc = subprocess.run([sys.executable, "-m", "motiondiff.eval.vae_levels", *args], cwd=tmp_path, env=env,
+    proc = subprocess.run([sys.executable, "-m", "motiondiff.studies.vae_levels", *args], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=300)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     data = json.loads(out.with_suffix(".json").read_text())

@@ -8,11 +8,11 @@ import zipfile
 import numpy as np
 import pytest
 
-from motiondiff.data import bandai
-from motiondiff.data.features import features_from_canonical, joints_from_features
-from motiondiff.data.prepare import PrepareError, main, prepare_bandai
-from motiondiff.data.prepared import load_split
-from motiondiff.data.sources import Source, SourceError
+from motiondiff.data.formats.archive import Source, SourceError
+from motiondiff.data.formats.prepared import load_split
+from motiondiff.data.preparing.prepare import PrepareError, main, prepare_bandai
+from motiondiff.data.representations.hml_features import features_from_canonical, joints_from_features
+from motiondiff.data.sources import bandai
 
 
 @pytest.fixture(scope="module")

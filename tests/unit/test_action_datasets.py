@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motiondiff.data.errors import DatasetNotFoundError
-from motiondiff.data.features import features_from_canonical
-from motiondiff.data.humanact12 import ACTION_NAMES, load_humanact12
-from motiondiff.data.smpl_clips import place_points
-from motiondiff.data.uestc import VIBE_TO_SMPL, load_uestc
+from motiondiff.data.representations.hml_features import features_from_canonical
+from motiondiff.data.sources.errors import DatasetNotFoundError
+from motiondiff.data.sources.humanact12 import ACTION_NAMES, load_humanact12
+from motiondiff.data.sources.smpl_clips import place_points
+from motiondiff.data.sources.uestc import VIBE_TO_SMPL, load_uestc
 from motiondiff.safe_pickle import load_pickle
 from motiondiff.skeleton import SMPL22
 

@@ -6,7 +6,7 @@ import numpy as np
 from test_captions_and_splits import _rest_pose, _walk
 
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.eval.behaviour import Behaviour, mean_joint_acceleration, mean_joint_speed, real_clips
+from motiondiff.studies.behaviour import Behaviour, mean_joint_acceleration, mean_joint_speed, real_clips
 
 
 def test_walk_and_raise_are_told_apart():
@@ -47,7 +47,7 @@ def test_report_samples_as_sample_py_does():
     """The behaviour report's sampler is sample.py's default (conf/sample.yaml), not a sampler of its own."""
     from hydra import compose, initialize_config_dir
 
-    from motiondiff.eval.behaviour import CONF_DIR, DEFAULT_PROMPTS, default_sampler
+    from motiondiff.studies.behaviour import CONF_DIR, DEFAULT_PROMPTS, default_sampler
 
     with initialize_config_dir(str(CONF_DIR), version_base=None):
         cfg = compose("sample")  # what sample.py runs with when given nothing
@@ -62,8 +62,8 @@ def test_an_action_model_is_asked_with_the_prompts_labels():
     import torch
 
     from motiondiff.cli.common import SHIPPED_MODELS
-    from motiondiff.eval.behaviour import DEFAULT_PROMPTS, report
     from motiondiff.release import load_release
+    from motiondiff.studies.behaviour import DEFAULT_PROMPTS, report
 
     module = load_release(SHIPPED_MODELS["action"])
     assert module.condition_kind == "action"

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from motiondiff.data import bvh
-from motiondiff.data.bvh import BVHError, format_bvh, motion_from_arrays, parse_bvh, read_bvh, write_bvh
+from motiondiff.data.formats import bvh
+from motiondiff.data.formats.bvh import BVHError, format_bvh, motion_from_arrays, parse_bvh, read_bvh, write_bvh
 
 ROOT6 = ("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")
 ZXY = ("Zrotation", "Xrotation", "Yrotation")

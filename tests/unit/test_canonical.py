@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import ROTATION_REPRESENTATIONS, get_representation
 from motiondiff.edit.canonical import (
     carries_placement,

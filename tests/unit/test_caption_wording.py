@@ -8,16 +8,22 @@ import json
 import numpy as np
 import pytest
 
-from motiondiff.data.caption_wording import ACTION_WORDING, STYLE_WORDING, inflect, inflect_phrase, varied_captions
-from motiondiff.data.captions import (
+from motiondiff.data.preparing.caption_wording import (
+    ACTION_WORDING,
+    STYLE_WORDING,
+    inflect,
+    inflect_phrase,
+    varied_captions,
+)
+from motiondiff.data.preparing.captions import (
     CONTENT_PHRASES,
     STYLE_PHRASES,
     MotionFacts,
     generate_captions,
     normalise_caption,
 )
-from motiondiff.data.prepare import caption_seed
-from motiondiff.data.splits import rare_to_train
+from motiondiff.data.preparing.prepare import caption_seed
+from motiondiff.data.preparing.splits import rare_to_train
 
 FACTS = MotionFacts(4.0, 3.1, 3.3, "forward", 5.0, 0.8, (), ())
 
@@ -86,7 +92,7 @@ def test_paraphrase_set_is_kept_out_of_generated_captions():
     """The human-style paraphrases (data/paraphrases) cover every Bandai action; a generated caption that happens to
     equal one is left out (the label caption takes another subject), so no model trains on them."""
     from motiondiff.data.datamodules import embedded_data_root
-    from motiondiff.data.prepare import load_held_out
+    from motiondiff.data.preparing.prepare import load_held_out
 
     path = embedded_data_root().parent / "paraphrases" / "bandai_human.json"
     items = json.loads(path.read_text())["descriptions"]

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motiondiff.data.captions import CONTENT_PHRASES, STYLE_PHRASES, generate_captions, measure
-from motiondiff.data.joint_map import JointMap
-from motiondiff.data.splits import stratified_split, stratified_subset
+from motiondiff.data.formats.joint_map import JointMap
+from motiondiff.data.preparing.captions import CONTENT_PHRASES, STYLE_PHRASES, generate_captions, measure
+from motiondiff.data.preparing.splits import stratified_split, stratified_subset
 from motiondiff.skeleton import SMPL22, SMPL22_BONE_LENGTHS
 
 

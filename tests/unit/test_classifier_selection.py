@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import torch
 
-from motiondiff.eval.evaluators import ActionClassifierGRU
 from motiondiff.lit.evaluator import ActionClassifierModule
+from motiondiff.models.evaluators.networks import ActionClassifierGRU
 
 
 class _Module(ActionClassifierModule):

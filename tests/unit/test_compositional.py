@@ -10,11 +10,11 @@ import pytest
 from hydra import compose, initialize_config_dir
 
 from motiondiff.cli.common import REPO_DIR, register_resolvers
-from motiondiff.data.compositional import MAX_SEAM_RATIO, MIN_PART_FRAMES, RULES, allocate, build_split
-from motiondiff.data.compositional_join import Part, join_captions, join_parts, place_canonically, split_subject
+from motiondiff.data.compositional.dataset import MAX_SEAM_RATIO, MIN_PART_FRAMES, RULES, allocate, build_split
+from motiondiff.data.compositional.join import Part, join_captions, join_parts, place_canonically, split_subject
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
-from motiondiff.data.features import mean_std
-from motiondiff.data.prepared import SPLITS, load_split
+from motiondiff.data.formats.prepared import SPLITS, load_split
+from motiondiff.data.representations.hml_features import mean_std
 from motiondiff.kinematics import forward_kinematics
 from motiondiff.skeleton import SMPL22, SMPL22_BONE_LENGTHS
 from motiondiff.text.parse import parse_caption, parse_captions

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.data.features import feature_slices
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import get_representation
+from motiondiff.data.representations.hml_features import feature_slices
 from motiondiff.edit.masks import (
     EditError,
     frame_keep,

@@ -9,7 +9,7 @@ from hydra import compose, initialize_config_dir
 
 from motiondiff.cli.common import REPO_DIR, register_resolvers
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import get_representation
 from motiondiff.edit import close_root_path, dataset_motions, inbetween, needs_root_closure
 from motiondiff.edit.trajectory import gaps

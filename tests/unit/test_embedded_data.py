@@ -9,8 +9,8 @@ import pytest
 import torch
 
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
-from motiondiff.data.errors import DatasetNotFoundError
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.prepared import load_split
+from motiondiff.data.sources.errors import DatasetNotFoundError
 
 ROOT = embedded_data_root()
 

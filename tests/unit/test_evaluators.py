@@ -9,7 +9,7 @@ import pytest
 import torch
 from fixtures.official_layouts import layout_shapes, write_glove
 
-from motiondiff.eval.evaluators import (
+from motiondiff.models.evaluators.networks import (
     ActionClassifierGRU,
     TextMotionEvaluator,
     classifier_input,
@@ -18,7 +18,7 @@ from motiondiff.eval.evaluators import (
     load_released,
     save_released,
 )
-from motiondiff.eval.word_vectors import POS_INDEX, Vocabulary, load_glove, pos_category, sequence, tag_caption
+from motiondiff.text.word_vectors import POS_INDEX, Vocabulary, load_glove, pos_category, sequence, tag_caption
 
 
 def test_official_action_classifier_reproduces_reference(shared):
@@ -142,8 +142,8 @@ def test_classifier_input_is_relative_to_the_first_root_on_the_ground():
 
 
 def test_pose_and_trajectory_holds_the_world_joints():
-    from motiondiff.data.features import features_from_joints, joints_from_features, recover_root
-    from motiondiff.eval.evaluators import pose_and_trajectory
+    from motiondiff.data.representations.hml_features import features_from_joints, joints_from_features, recover_root
+    from motiondiff.models.evaluators.networks import pose_and_trajectory
     from motiondiff.rotations import qinv, qrot
 
     t = np.linspace(0, 2, 41)[:, None]

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from motiondiff.data.bvh import BVHMotion, read_bvh
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.bvh import BVHMotion, read_bvh
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import ROTATION_REPRESENTATIONS, get_representation
 from motiondiff.export import FORMATS, ExportReport, export_bvh, export_bvh_from_features, export_motion
 from motiondiff.kinematics import forward_kinematics

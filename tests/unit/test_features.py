@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motiondiff.data.features import (
+from motiondiff.data.representations.hml_features import (
     canonicalize_joints,
     feature_dim,
     feature_slices,

@@ -9,7 +9,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.inverse_kinematics import fit_rest_offsets, solve_rotations
 from motiondiff.kinematics import forward_kinematics
 from motiondiff.rotations import kabsch, qangle, qfix, qrot, qswing, qtwist_angle, quat_to_matrix

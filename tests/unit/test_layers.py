@@ -13,10 +13,12 @@ import pytest
 SRC = Path(__file__).resolve().parents[2] / "src"
 PACKAGE = SRC / "motiondiff"
 
-# the two top layers and who may import them: the CLI only itself; the pipelines the CLI and themselves
+# the top layers and who may import them: the CLI only itself; the research studies the CLI and themselves; the
+# pipelines the CLI, the studies and themselves
 ALLOWED_ABOVE = {
     "motiondiff.cli": ("motiondiff.cli",),
-    "motiondiff.pipelines": ("motiondiff.cli", "motiondiff.pipelines"),
+    "motiondiff.studies": ("motiondiff.cli", "motiondiff.studies"),
+    "motiondiff.pipelines": ("motiondiff.cli", "motiondiff.studies", "motiondiff.pipelines"),
 }
 
 
@@ -114,7 +116,10 @@ def test_no_import_cycles():
     [
         ({"motiondiff.eval.metrics": {"motiondiff.cli.common"}}, "layers"),
         (
-            {"motiondiff.data.clip": {"motiondiff.eval.metrics"}, "motiondiff.eval.metrics": {"motiondiff.data.clip"}},
+            {
+                "motiondiff.data.representations.clip": {"motiondiff.eval.metrics"},
+                "motiondiff.eval.metrics": {"motiondiff.data.representations.clip"},
+            },
             "cycle",
         ),
     ],
@@ -126,4 +131,4 @@ def test_the_checks_fail_on_a_planted_violation(extra, expect):
     if expect == "layers":
         assert _layer_violations(edges)
     else:
-        assert any("motiondiff.data.clip" in c for c in _cycles(edges))
+        assert any("motiondiff.data.representations.clip" in c for c in _cycles(edges))

@@ -8,7 +8,7 @@ from fixtures.tiny_models import tiny_datamodule, tiny_module
 
 from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.edit.inputs import dataset_motions
-from motiondiff.eval.editing import low_noise_error
+from motiondiff.studies.editing import low_noise_error
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motiondiff.data.features import EVALUATOR_STD_BIAS, evaluator_std, feature_slices, mean_std
+from motiondiff.data.representations.hml_features import EVALUATOR_STD_BIAS, evaluator_std, feature_slices, mean_std
 
 ROOT_AND_CONTACTS = ("root_rot_vel", "root_lin_vel", "root_y", "contacts")
 # A 0/1 contact channel has std <= 0.5, so one divided by 5 is <= 0.1.
@@ -46,7 +46,7 @@ def test_evaluator_std_divides_root_and_contacts_by_five(shared):
 def test_embedded_data_std_is_plain():
     """The committed embedded dataset's Std.npy is the plain block-averaged std of its train features."""
     from motiondiff.data.datamodules import embedded_data_root
-    from motiondiff.data.prepared import load_split
+    from motiondiff.data.formats.prepared import load_split
 
     train = load_split(embedded_data_root(), "train")
     _, std = mean_std(train.arrays["features"])

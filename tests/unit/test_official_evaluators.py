@@ -12,13 +12,13 @@ from fixtures.action_layouts import fk
 from fixtures.official_layouts import stgcn_state, write_official_action, write_official_t2m
 from scipy.spatial.transform import Rotation
 
-from motiondiff.data.clip import ClipMotion
-from motiondiff.data.features import feature_slices
-from motiondiff.data.representation_spec import representation_spec
 from motiondiff.data.representations import RotationRepresentation
+from motiondiff.data.representations.clip import ClipMotion
+from motiondiff.data.representations.hml_features import feature_slices
+from motiondiff.data.representations.spec import representation_spec
 from motiondiff.eval import official
-from motiondiff.eval.evaluators import load_official_action_classifier
-from motiondiff.eval.stgcn import STGCNRecognition, load_official_uestc_recognition, spatial_adjacency
+from motiondiff.models.evaluators.networks import load_official_action_classifier
+from motiondiff.models.evaluators.stgcn import STGCNRecognition, load_official_uestc_recognition, spatial_adjacency
 from motiondiff.skeleton import SMPL22, SMPL24
 
 # y-up -> source axes for a "-y" source: 180 degrees about x, (x, y, z) -> (x, -y, -z)
@@ -175,8 +175,8 @@ def test_missing_official_files_name_the_layout(tmp_path):
 
 
 def test_official_text_side_reads_the_texts_files_tokens():
-    from motiondiff.eval.evaluators import TextMotionEvaluator
-    from motiondiff.eval.word_vectors import POS_INDEX
+    from motiondiff.models.evaluators.networks import TextMotionEvaluator
+    from motiondiff.text.word_vectors import POS_INDEX
 
     model = TextMotionEvaluator(263, ["person", "walk", "jump"], word_dim=8)
     caption = "someone strolls"  # spaCy would tag other words; the file's tokens decide

@@ -12,8 +12,8 @@ import pytest
 import torch
 
 from motiondiff.data.datamodules import HumanML3DDataModule, KITDataModule
-from motiondiff.data.errors import DatasetNotFoundError
-from motiondiff.data.humanml3d import KIT, load_official_split, parse_caption_line, read_split_ids
+from motiondiff.data.sources.errors import DatasetNotFoundError
+from motiondiff.data.sources.humanml3d import KIT, load_official_split, parse_caption_line, read_split_ids
 
 W1 = "a person walks forward and turns around.#a/DET person/NOUN walk/VERB forward/ADV and/CCONJ turn/VERB around/ADV"
 W2 = "someone strolls ahead, then spins.#someone/PRON stroll/VERB ahead/ADV then/ADV spin/VERB"
@@ -127,7 +127,7 @@ def test_segments_are_cut_as_official(hml):
 
 def test_skips_are_counted_and_logged(hml, caplog):
     root, _ = hml
-    with caplog.at_level(logging.WARNING, logger="motiondiff.data.humanml3d"):
+    with caplog.at_level(logging.WARNING, logger="motiondiff.data.sources.humanml3d"):
         records, _, _ = load_official_split(root, "train")
     ids = {r.meta["clip_id"] for r in records}
     # 000002 too short, 000003 has 200 frames, 000006 has no texts, 009999 no features

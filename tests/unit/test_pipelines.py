@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from motiondiff.data.bvh import read_bvh
+from motiondiff.data.formats.bvh import read_bvh
 from motiondiff.errors import UsageError
 from motiondiff.pipelines import MotionOutput, MotionPipeline
 

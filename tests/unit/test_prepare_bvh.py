@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from test_bvh import CMU_NAMES, CMU_PARENTS, Spec, bvh_text, reference_positions
 
-from motiondiff.data.joint_map import JointMap
-from motiondiff.data.prepare import PrepareError, main
-from motiondiff.data.prepare_bvh import ensure_prepared_bvh, path_labels, prepare_bvh
-from motiondiff.data.prepared import load_split
-from motiondiff.data.processing import TARGET_FPS
+from motiondiff.data.formats.joint_map import JointMap
+from motiondiff.data.formats.prepared import load_split
+from motiondiff.data.preparing.from_bvh import ensure_prepared_bvh, path_labels, prepare_bvh
+from motiondiff.data.preparing.prepare import PrepareError, main
+from motiondiff.data.preparing.processing import TARGET_FPS
 
 LEFT = {"LHipJoint": [0, 0, 0], "LeftUpLeg": [9, -5, 0], "LeftLeg": [0, -42, 0], "LeftFoot": [0, -40, 0],
         "LeftToeBase": [0, -6, 12], "LeftShoulder": [0, 0, 0], "LeftArm": [16, 6, 0], "LeftForeArm": [27, 0, 0],
@@ -270,7 +270,7 @@ def test_100style_file_names():
 
 
 def test_infer_on_the_real_bandai_skeleton_matches_the_shipped_map(shared):
-    from motiondiff.data.bvh import parse_bvh
+    from motiondiff.data.formats.bvh import parse_bvh
 
     with zipfile.ZipFile(shared("data", "bandai-namco", "bandai-ds1.zip")) as z:
         name = next(n for n in z.namelist() if n.endswith(".bvh"))

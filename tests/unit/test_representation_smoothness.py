@@ -8,7 +8,7 @@ import pytest
 
 from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.edit.smoothing import smooth_features, smooth_joints
-from motiondiff.eval.representation_smoothness import ORDER, representation_smoothness
+from motiondiff.studies.representation_smoothness import ORDER, representation_smoothness
 
 
 def test_every_representation_is_scored_on_its_own_features():

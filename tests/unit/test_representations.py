@@ -7,16 +7,16 @@ import numpy as np
 import pytest
 import torch
 
-from motiondiff.data import features as F
-from motiondiff.data.clip import ClipMotion
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import (
     REPRESENTATIONS,
     ROTATION_REPRESENTATIONS,
     Representation,
     get_representation,
 )
+from motiondiff.data.representations import hml_features as F
+from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.rotations import qrot
 from motiondiff.skeleton import KIT21, SMPL22
 
@@ -122,12 +122,12 @@ def test_decode_batched_with_per_clip_offsets(val):
 # a clip that travels (root path) and one with large limb rotations
 @pytest.fixture(scope="module", params=["dataset-1_walk-back_normal_001", "dataset-1_kick_normal_001"])
 def bvh_clip(shared, request):
-    from motiondiff.data import bandai
-    from motiondiff.data.bvh import parse_bvh
-    from motiondiff.data.features import ground_and_face
-    from motiondiff.data.joint_map import JointMap
-    from motiondiff.data.processing import TARGET_FPS, process_motion
-    from motiondiff.data.sources import Source
+    from motiondiff.data.formats.archive import Source
+    from motiondiff.data.formats.bvh import parse_bvh
+    from motiondiff.data.formats.joint_map import JointMap
+    from motiondiff.data.preparing.processing import TARGET_FPS, process_motion
+    from motiondiff.data.representations.hml_features import ground_and_face
+    from motiondiff.data.sources import bandai
 
     source = Source(shared("data", "bandai-namco", "bandai-ds1.zip"))
     clips, _ = bandai.list_clips(source)

@@ -68,7 +68,7 @@ def test_vae_and_latent_loaders_refuse_a_crafted_checkpoint(crafted):
 
 
 def test_official_evaluator_loader_refuses_a_crafted_checkpoint(crafted):
-    from motiondiff.eval.evaluators import load_official_action_classifier
+    from motiondiff.models.evaluators.networks import load_official_action_classifier
 
     _refused(load_official_action_classifier, *crafted)
 

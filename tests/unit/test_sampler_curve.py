@@ -8,7 +8,7 @@ import json
 import pytest
 
 from motiondiff.cli.common import UsageError
-from motiondiff.eval.sampler_curve import choose, load_run, main
+from motiondiff.studies.sampler_curve import choose, load_run, main
 
 
 def _run(folder, name, steps, fid, top_steps=None, accuracy=None):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.data.prepared import load_split
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.eval.metrics import smoothness
 from motiondiff.skeleton import SMPL22
@@ -53,7 +53,7 @@ def test_smoothing_jittery_motion_raises_the_smoothness_metric():
 def test_smoothed_features_keep_their_rows_and_lower_the_joint_acceleration():
     """evaluate.py's smooth_sigma: features of a real clip with frame-to-frame jitter added to the joints, smoothed
     through the joints and re-encoded, keep their row count and width and lose most of the added acceleration."""
-    from motiondiff.data.features import features_from_joints, joints_from_features
+    from motiondiff.data.representations.hml_features import features_from_joints, joints_from_features
     from motiondiff.edit.smoothing import smooth_features
 
     data = load_split(embedded_data_root(), "train")

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from motiondiff.eval.weight_control import guided_index, root_travel, summarise
+from motiondiff.studies.weight_control import guided_index, root_travel, summarise
 
 
 def test_the_guided_action_is_the_first_that_moves_the_body():

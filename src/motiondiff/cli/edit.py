@@ -16,9 +16,9 @@ from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
-from motiondiff.eval.editing import edit_numbers
 from motiondiff.export.outputs import export_features
 from motiondiff.lit.loading import load_model as load_module
+from motiondiff.studies.editing import edit_numbers
 
 KINDS = ("inbetween", "parts")
 

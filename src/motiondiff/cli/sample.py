@@ -26,17 +26,17 @@ from motiondiff.cli.common import (
     to_dict,
 )
 from motiondiff.cli.validate import RULES_SAMPLE, check
-from motiondiff.data.captions import measure
-from motiondiff.data.representation_spec import bridge_from_spec
+from motiondiff.data.preparing.captions import measure
+from motiondiff.data.representations.spec import bridge_from_spec
 from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
-from motiondiff.eval.behaviour import mean_joint_speed
 from motiondiff.export.outputs import export_features, parse_formats
 from motiondiff.lit.conditions import check_text, repeated  # noqa: F401  (check_text: used by edit/sample_guided)
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.lit.generation import generate_features
 from motiondiff.lit.loading import load_model
+from motiondiff.studies.behaviour import mean_joint_speed
 
 # "<text>:<seconds>", seconds a positive decimal, optionally "4s"; a colon not followed by a number is text
 TIMED = re.compile(r"^(?P<text>.*?)\s*:\s*(?P<seconds>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*s?\s*$")

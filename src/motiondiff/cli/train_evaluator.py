@@ -22,10 +22,10 @@ from omegaconf import DictConfig, OmegaConf
 from motiondiff.cli.common import REPO_DIR, UsageError
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.eval import metrics as M
-from motiondiff.eval.evaluators import ActionClassifierGRU, TextMotionEvaluator, save_released
 from motiondiff.eval.protocol import TEXT_MOTION, EvalClips, Evaluators, time_reversed
-from motiondiff.eval.word_vectors import Vocabulary, load_glove
 from motiondiff.lit.evaluator import ActionClassifierModule, MovementAutoencoderModule, TextMotionEvaluatorModule
+from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, save_released
+from motiondiff.text.word_vectors import Vocabulary, load_glove
 
 log = logging.getLogger(__name__)
 

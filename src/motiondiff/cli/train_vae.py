@@ -2,7 +2,7 @@
 
 Same datamodule, trainer, loggers and checkpointing as train.py; the best checkpoint is the one with the lowest
 validation MPJPE (`best-mpjpe-*.ckpt`), and run.json records the steps, wall time and parameter count that the
-level comparison (`python -m motiondiff.eval.vae_levels`) reports.
+level comparison (`python -m motiondiff.studies.vae_levels`) reports.
 """
 
 from __future__ import annotations

@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.data.clip import ClipSplit
 from motiondiff.data.datamodules import ClipDataModule
-from motiondiff.data.humanact12 import load_humanact12
-from motiondiff.data.uestc import load_uestc
+from motiondiff.data.representations.clip import ClipSplit
+from motiondiff.data.sources.humanact12 import load_humanact12
+from motiondiff.data.sources.uestc import load_uestc
 
 
 class _ActionClipDataModule(ClipDataModule):
@@ -36,7 +36,7 @@ class _ActionClipDataModule(ClipDataModule):
 
 
 class HumanAct12DataModule(_ActionClipDataModule):
-    """`<root>/humanact12poses.pkl` (ACTOR's HumanAct12Poses); see motiondiff.data.humanact12 for the layout."""
+    """`<root>/humanact12poses.pkl` (ACTOR's HumanAct12Poses); see motiondiff.data.sources.humanact12 for the layout."""
 
     def load_clips(self, split: str) -> ClipSplit:
         return load_humanact12(self.root, split)

@@ -16,15 +16,15 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader, get_worker_info
 
-from motiondiff.data.clip import ClipSplit, LabelledClip
 from motiondiff.data.datasets import MotionDataset, MotionRecord, collate_motion
-from motiondiff.data.humanml3d import HUMANML3D, KIT, OfficialLayout, load_official_split
-from motiondiff.data.joint_map import JointMap
-from motiondiff.data.prepared import PreparedSplit
-from motiondiff.data.prepared import load_split as load_prepared_split
-from motiondiff.data.representation_spec import HMLBridge, bridge_from_spec, representation_spec
+from motiondiff.data.formats.joint_map import JointMap
+from motiondiff.data.formats.prepared import PreparedSplit
+from motiondiff.data.formats.prepared import load_split as load_prepared_split
 from motiondiff.data.representations import Representation, get_representation
+from motiondiff.data.representations.clip import ClipSplit, LabelledClip
+from motiondiff.data.representations.spec import HMLBridge, bridge_from_spec, representation_spec
 from motiondiff.data.resumable import EpochShuffleSampler, balance_weights
+from motiondiff.data.sources.humanml3d import HUMANML3D, KIT, OfficialLayout, load_official_split
 from motiondiff.skeleton import SMPL22
 
 log = logging.getLogger(__name__)
@@ -172,7 +172,7 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
 
 
 class OfficialLayoutDataModule(MotionDataModule):
-    """A root in the official HumanML3D/KIT-ML layout (see `motiondiff.data.humanml3d`)."""
+    """A root in the official HumanML3D/KIT-ML layout (see `motiondiff.data.sources.humanml3d`)."""
 
     layout: OfficialLayout
 
@@ -323,10 +323,10 @@ class ClipDataModule(MotionDataModule, abc.ABC):
 
 
 class PreparedDataModule(ClipDataModule):
-    """A folder written by `python -m motiondiff.data.prepare` (Bandai, the embedded bandai_mini, BVH folders).
+    """A folder written by `python -m motiondiff.data.preparing.prepare` (Bandai, the embedded bandai_mini, BVH folders).
 
     Clips shorter than `min_frames` are left out of training and evaluation (logged with their count); the
-    captions are GENERATED ones (see motiondiff.data.captions) and each record says so in its meta. HumanML3D
+    captions are GENERATED ones (see motiondiff.data.preparing.captions) and each record says so in its meta. HumanML3D
     features (the default representation) are read as prepared, with the prepared Mean/Std; any other
     representation is encoded from the stored joints and native rotations.
     """
@@ -405,8 +405,8 @@ class PreparedDataModule(ClipDataModule):
 class BVHDataModule(PreparedDataModule):
     """Any folder or zip of BVH files (100STYLE, Bandai, your own capture) with an optional labels CSV.
 
-    The files are prepared once into `cache` (`python -m motiondiff.data.prepare bvh` does the same by hand; see
-    motiondiff.data.prepare_bvh for the labels format and how labels are read from paths) and reused while the
+    The files are prepared once into `cache` (`python -m motiondiff.data.preparing.prepare bvh` does the same by hand; see
+    motiondiff.data.preparing.from_bvh for the labels format and how labels are read from paths) and reused while the
     sources and options stay the same.
     """
 
@@ -429,8 +429,8 @@ class BVHDataModule(PreparedDataModule):
 
     def prepared(self, split: str) -> PreparedSplit:
         if not self._prepared:
-            from motiondiff.data.errors import DatasetNotFoundError
-            from motiondiff.data.prepare_bvh import ensure_prepared_bvh
+            from motiondiff.data.preparing.from_bvh import ensure_prepared_bvh
+            from motiondiff.data.sources.errors import DatasetNotFoundError
 
             if not Path(self.src).exists():
                 raise DatasetNotFoundError(

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 from omegaconf import OmegaConf
 
-from motiondiff.data.clip import ClipMotion
-from motiondiff.data.features import canonicalize_joints, ground_and_face, skeleton_for_dim
 from motiondiff.data.representations import Representation
+from motiondiff.data.representations.clip import ClipMotion
+from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face, skeleton_for_dim
 from motiondiff.edit.canonical import carries_placement, placement, to_canonical
 from motiondiff.edit.masks import EditError
 from motiondiff.paths import REPO_DIR, work_dir
@@ -102,11 +102,13 @@ def _dataset_window(module, features: np.ndarray, source: str, start: int, frame
 def dataset_motions(module, split: str = "test", data_root=None, frames: int | None = None) -> list[InputMotion]:
     """Every clip of a prepared dataset's split (default: the model's training data) with at least
     MIN_INPUT_FRAMES frames, as input motions (each cut to the model's maximum length, or ``frames``)."""
-    from motiondiff.data.prepared import load_split
+    from motiondiff.data.formats.prepared import load_split
 
     root = Path(data_root) if data_root is not None else training_data_root(module)
     if root is None or not (root / "meta.json").is_file():
-        raise EditError(f"no prepared dataset at {root}; pass data_root=<a folder made by motiondiff.data.prepare>")
+        raise EditError(
+            f"no prepared dataset at {root}; pass data_root=<a folder made by motiondiff.data.preparing.prepare>"
+        )
     data = load_split(root, split)
     motions = []
     for i in range(data.num_clips):
@@ -189,8 +191,8 @@ def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
 
 def _bvh_features(path: Path, module, start: int, frames: int | None):
     """Features of a window of a BVH file, prepared exactly as `prepare` prepares a clip cut to a window."""
-    from motiondiff.data.bvh import BVHError, read_bvh
-    from motiondiff.data.processing import TARGET_FPS, ClipError, process_motion
+    from motiondiff.data.formats.bvh import BVHError, read_bvh
+    from motiondiff.data.preparing.processing import TARGET_FPS, ClipError, process_motion
 
     rep: Representation = module.representation
     target = feature_skeleton(module)
@@ -230,7 +232,7 @@ def _bvh_features(path: Path, module, start: int, frames: int | None):
 def _bvh_joint_map(module, motion, path: Path):
     """The joint map the model's dataset was prepared with when the file has its joints, else one inferred from
     the joint names (as `prepare bvh --joint-map auto`)."""
-    from motiondiff.data.joint_map import JointMap
+    from motiondiff.data.formats.joint_map import JointMap
 
     spec = module.hparams.get("representation") or {}
     if spec.get("joint_map"):
@@ -287,7 +289,7 @@ def _official_captions(root: Path, clip_id: str) -> list[str]:
 
 
 def _prepared_clip(root: Path, split: str, clip_id: str, module) -> tuple[np.ndarray, dict]:
-    from motiondiff.data.prepared import SPLITS, load_split
+    from motiondiff.data.formats.prepared import SPLITS, load_split
 
     if split and split not in SPLITS:
         raise EditError(f"unknown split {split!r} in {split}:{clip_id}; choose from {', '.join(SPLITS)}")

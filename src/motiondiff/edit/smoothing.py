@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from motiondiff.data.features import (
+from motiondiff.data.representations.hml_features import (
     canonicalize_joints,
     features_from_canonical,
     features_from_joints,

@@ -6,7 +6,7 @@
 - HumanAct12: action-to-motion's GRU classifier on the 24 SMPL joints (72-d per frame), as MDM/ACTOR compute them:
   joint positions of the model's own rig (FK of its rotations), in the source data's axes, relative to the first
   frame's root joint.
-- UESTC: ACTOR's ST-GCN recognition model on the 6D rotations of the 24 SMPL joints (`motiondiff.eval.stgcn`); MDM
+- UESTC: ACTOR's ST-GCN recognition model on the 6D rotations of the 24 SMPL joints (`motiondiff.models.evaluators.stgcn`); MDM
   Table 4 reports FID against the train and the test clips.
 
 Our datasets are canonicalised when loaded (y up, frame-0 root at the x/z origin facing +z). Motion goes back to the
@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.data.features import feature_slices
 from motiondiff.data.representations import JointPositions, RotationRepresentation
-from motiondiff.data.smpl_clips import UP_TO_Y
-from motiondiff.eval.evaluators import load_official_action_classifier, load_official_t2m_evaluator
+from motiondiff.data.representations.hml_features import feature_slices
+from motiondiff.data.sources.smpl_clips import UP_TO_Y
 from motiondiff.eval.protocol import Evaluators, pad
-from motiondiff.eval.stgcn import load_official_uestc_recognition
+from motiondiff.models.evaluators.networks import load_official_action_classifier, load_official_t2m_evaluator
+from motiondiff.models.evaluators.stgcn import load_official_uestc_recognition
 from motiondiff.rotations import quat_to_matrix
 
 log = logging.getLogger(__name__)
@@ -115,7 +115,7 @@ def official_evaluators(dataset: str, official_dir: str | Path, module, dm) -> E
 
 
 def _rig_representation(module):
-    from motiondiff.data.representation_spec import representation_from_spec
+    from motiondiff.data.representations.spec import representation_from_spec
 
     rep = representation_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
     if not isinstance(rep, (RotationRepresentation, JointPositions)) or rep.skeleton.num_joints != 24:

@@ -23,11 +23,11 @@ import numpy as np
 import torch
 
 from motiondiff.data.datasets import MotionDataset
-from motiondiff.data.features import joints_from_features
-from motiondiff.data.representation_spec import bridge_from_spec
+from motiondiff.data.representations.hml_features import joints_from_features
+from motiondiff.data.representations.spec import bridge_from_spec
 from motiondiff.eval import metrics as M
-from motiondiff.eval.evaluators import ActionClassifierGRU, TextMotionEvaluator, load_released, motion_input
 from motiondiff.lit.generation import generate_features
+from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, load_released, motion_input
 
 log = logging.getLogger(__name__)
 TEXT_MOTION, ACTION = "text_motion", "action"
@@ -77,7 +77,7 @@ class EvalClips:
 
     def label_captions(self) -> list[str]:
         """Each clip's first caption: for generated captions the one built from the labels alone, which names the
-        action (motiondiff.data.captions), so the action-accuracy metric asks for exactly the labelled action."""
+        action (motiondiff.data.preparing.captions), so the action-accuracy metric asks for exactly the labelled action."""
         return [c[0] if c else "" for c in self.captions]
 
     @property
@@ -266,7 +266,7 @@ def generate(
 def time_reversed(features: np.ndarray, num_joints: int) -> np.ndarray:
     """The same clip played backwards, re-encoded (velocities and contacts recomputed): a motion every evaluator
     should tell apart from the original (walking forward becomes walking backward)."""
-    from motiondiff.data.features import features_from_joints, skeleton_for_dim
+    from motiondiff.data.representations.hml_features import features_from_joints, skeleton_for_dim
 
     joints = joints_from_features(features, num_joints)[::-1]
     return features_from_joints(np.ascontiguousarray(joints), skeleton_for_dim(features.shape[-1]))

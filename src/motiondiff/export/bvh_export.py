@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from motiondiff.data.bvh import motion_from_arrays, write_bvh
+from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
 from motiondiff.inverse_kinematics import fit_rest_offsets, solve_rotations
 from motiondiff.rotations import matrix_to_quat, qfix, qnormalize
 from motiondiff.skeleton import Skeleton

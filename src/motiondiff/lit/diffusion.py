@@ -13,7 +13,7 @@ import lightning as L
 import numpy as np
 import torch
 
-from motiondiff.data.representation_spec import representation_from_spec
+from motiondiff.data.representations.spec import representation_from_spec
 from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, guided_model_fn, make_betas
 from motiondiff.diffusion.thresholding import make_threshold
 from motiondiff.edit.masks import part_keep

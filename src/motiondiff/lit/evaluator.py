@@ -20,9 +20,9 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from motiondiff.data.features import evaluator_std, skeleton_for_dim
-from motiondiff.eval.evaluators import ActionClassifierGRU, TextMotionEvaluator, motion_input
+from motiondiff.data.representations.hml_features import evaluator_std, skeleton_for_dim
 from motiondiff.eval.metrics import r_precision
+from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, motion_input
 
 
 def mirrored_labels(names: list[str]) -> list[int]:

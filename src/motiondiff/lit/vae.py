@@ -11,7 +11,7 @@ from __future__ import annotations
 import lightning as L
 import torch
 
-from motiondiff.data.representation_spec import representation_from_spec
+from motiondiff.data.representations.spec import representation_from_spec
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.models.vae import MotionVAE, vae_loss
 

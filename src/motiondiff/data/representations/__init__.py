@@ -3,10 +3,10 @@ rpajr, rpejr, rpmjr). `get_representation` builds one from its name and the data
 
 from __future__ import annotations
 
-from motiondiff.data.errors import RepresentationError
 from motiondiff.data.representations.base import Representation
 from motiondiff.data.representations.hml import HMLRepresentation
 from motiondiff.data.representations.rig import EULER_ORDER, JointPositions, RotationRepresentation
+from motiondiff.data.sources.errors import RepresentationError
 from motiondiff.skeleton import Skeleton
 
 REPRESENTATIONS = ("hml263", "kit251", "jp", "rp6jr", "rpqjr", "rpajr", "rpejr", "rpmjr")

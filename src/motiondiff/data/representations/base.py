@@ -9,8 +9,8 @@ from abc import ABC, abstractmethod
 import numpy as np
 import torch
 
-from motiondiff.data.clip import ClipMotion
-from motiondiff.data.features import FOOT_CONTACT_THRESHOLD
+from motiondiff.data.representations.clip import ClipMotion
+from motiondiff.data.representations.hml_features import FOOT_CONTACT_THRESHOLD
 from motiondiff.skeleton import Skeleton
 
 STD_FLOOR = 1e-8  # a per-dim std below this (constant dim, e.g. a joint that never moves) is replaced by 1

@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from motiondiff.data.clip import ClipMotion
-from motiondiff.data.features import feature_dim, feature_slices, features_from_canonical, mean_std
 from motiondiff.data.representations.base import Representation, contact_joints_of
+from motiondiff.data.representations.clip import ClipMotion
+from motiondiff.data.representations.hml_features import feature_dim, feature_slices, features_from_canonical, mean_std
 from motiondiff.skeleton import Skeleton
 from motiondiff.torch_rotations import qinv, qrot
 

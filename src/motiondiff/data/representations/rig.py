@@ -18,8 +18,8 @@ import torch
 from scipy.spatial.transform import Rotation
 
 from motiondiff import torch_rotations as tr
-from motiondiff.data.clip import ClipMotion
 from motiondiff.data.representations.base import Representation, contact_joints_of
+from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.kinematics import forward_kinematics_torch
 from motiondiff.rotations import matrix_to_6d, matrix_to_euler, qfix, qnormalize, quat_to_matrix
 from motiondiff.skeleton import Skeleton

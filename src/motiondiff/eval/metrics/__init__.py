@@ -9,7 +9,7 @@ Random draws (Diversity, MultiModality, KID subsets) use ``np.random.default_rng
 Protocols
 ---------
 Text-to-motion (Guo et al. 2022, "Generating diverse and natural 3D human motions from text"; MDM appendix B).
-Features are the text-motion matching evaluator's embeddings (`motiondiff.eval.evaluators`):
+Features are the text-motion matching evaluator's embeddings (`motiondiff.models.evaluators.networks`):
 
 - FID: Fréchet distance between Gaussians fitted to real and generated motion embeddings.
 - R-Precision: the evaluation batches of 32 are the pools: for each caption, its own motion and the 31 other

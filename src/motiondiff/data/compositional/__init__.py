@@ -1,0 +1,1 @@
+"""Compositional multi-action data joined from real single-action clips, with generated captions."""

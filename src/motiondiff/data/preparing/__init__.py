@@ -1,0 +1,1 @@
+"""Preparing a dataset from raw motion capture: processing, generated captions, splits, writing."""

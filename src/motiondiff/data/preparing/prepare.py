@@ -1,0 +1,149 @@
+"""Raw motion capture -> a prepared dataset folder (see motiondiff.data.formats.prepared for the format).
+
+    python -m motiondiff.data.preparing.prepare bandai --src bandai-ds1.zip --src bandai-ds2.zip --out data/bandai
+    python -m motiondiff.data.preparing.prepare bandai --src ... --out data/bandai_mini --per-group 1 --max-frames 120 --compact
+    python -m motiondiff.data.preparing.prepare bvh --src 100STYLE.zip --out data/100style          (see prepare_bvh)
+    python -m motiondiff.data.preparing.prepare bvh --src mocap/ --labels labels.csv --joint-map auto --out data/mocap
+
+Every clip is read; each one that cannot be used is named with its reason; counts per split and label are printed
+and saved in report.json. Files are written to temporary names and renamed, so an interrupted run leaves either
+the previous dataset or the new one, never a mixture of half-written files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from motiondiff.data.formats.archive import Source, SourceError
+from motiondiff.data.formats.joint_map import JointMap
+from motiondiff.data.formats.prepared import SPLITS
+from motiondiff.data.preparing.captions import GENERATED_NOTE
+from motiondiff.data.preparing.writer import (  # noqa: F401  (PrepareError, check_output, caption_seed, load_held_out: part of this module's API)
+    PrepareError,
+    _write_license_and_readme,
+    caption_seed,
+    check_output,
+    load_held_out,
+    process_and_write,
+)
+from motiondiff.data.sources import bandai
+
+
+def prepare_bandai(
+    sources: list[str | Path],
+    out: str | Path,
+    per_group: int | None = None,
+    max_frames: int | None = None,
+    compact: bool = False,
+    seed: int = 0,
+    workers: int | None = None,
+    force: bool = False,
+    progress: bool = True,
+    caption_variants: int = 12,
+    rare_to_train: int = 3,
+    held_out: list[str | Path] = (),
+) -> dict:
+    """Prepare Bandai Namco releases into `out`; returns the report (also saved as report.json).
+    `caption_variants`: generated sentences in varied wording per clip, beside the three label/measured ones;
+    `rare_to_train`: every clip of a content label with fewer clips than this goes to train (0: none);
+    `held_out`: JSON files of descriptions ({"descriptions": [{"text": ...}]}) no generated caption may equal."""
+    out = Path(out)
+    check_output(out, force)
+    joint_map = JointMap.load("bandai_to_smpl22")
+    clips, skipped = [], []
+    for path in sources:
+        found, bad = bandai.list_clips(Source(path))
+        clips += found
+        skipped += [(s.name, s.reason) for s in bad]
+    if not clips:
+        raise PrepareError("no usable clips in " + ", ".join(map(str, sources)))
+    options = {"compact": compact, "per_group": per_group, "max_frames": max_frames, "seed": seed,
+               "caption_variants": caption_variants, "rare_to_train": rare_to_train,
+               "held_out": [str(p) for p in held_out]}  # fmt: skip
+    meta = {"captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}
+    report = process_and_write(clips, skipped, sources, out, joint_map, options, meta, workers, progress)
+    _write_license_and_readme(out, sources, report)
+    return report
+
+
+def print_report(report: dict, out: Path) -> None:
+    total = sum(report["clips"].values())
+    print(f"\nprepared {total} clips into {out}  ({', '.join(f'{s} {n}' for s, n in report['clips'].items())})")
+    for kind in ("per_dataset", "per_content", "per_style"):
+        names = sorted({k for s in SPLITS for k in report[kind][s]})
+        print(f"\n{kind[4:]:<22}" + "".join(f"{s:>7}" for s in SPLITS))
+        for n in names:
+            print(f"  {n:<20}" + "".join(f"{report[kind][s].get(n, 0):>7}" for s in SPLITS))
+    print(f"\nskipped {len(report['skipped'])} clip(s)")
+    for item in report["skipped"]:
+        print(f"  {item['clip']}: {item['reason']}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m motiondiff.data.preparing.prepare", description=__doc__.split("\n\n")[0]
+    )
+    sub = parser.add_subparsers(dest="dataset", required=True)
+    b = sub.add_parser("bandai", help="Bandai Namco Research Motion Dataset 1/2 (zips or unzipped folders)")
+    b.add_argument("--src", action="append", required=True, help="a release zip or folder (repeat for several)")
+    b.add_argument(
+        "--caption-variants",
+        type=int,
+        default=12,
+        help="generated captions in varied wording per clip, beside the 3 label/measured ones (default 12)",
+    )
+    b.add_argument(
+        "--rare-to-train",
+        type=int,
+        default=3,
+        help="all clips of an action with fewer clips than this go to train (default 3; 0: none)",
+    )
+    b.add_argument(
+        "--held-out",
+        action="append",
+        default=[],
+        help="a JSON file of held-out descriptions no generated caption may repeat (repeatable)",
+    )
+    add_common_arguments(b)
+    v = sub.add_parser("bvh", help="any folder or zip of BVH files, with an optional labels CSV (100STYLE, ...)")
+    v.add_argument("--src", action="append", required=True, help="a folder or zip of .bvh files (repeat for several)")
+    v.add_argument("--labels", help="CSV with a header: file (required), action, style, caption (several: a|b)")
+    v.add_argument("--joint-map", default="auto", help="auto (from joint names), a shipped map name or path.json")
+    v.add_argument("--units-to-metres", type=float, help="factor from file units to metres (default: guessed)")
+    add_common_arguments(v)
+    return parser
+
+
+def add_common_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--per-group", type=int, help="keep at most N clips per dataset x content x style (subset)")
+    p.add_argument("--max-frames", type=int, help="crop longer clips to their most active N frames (at 20 fps)")
+    p.add_argument("--compact", action="store_true", help="leave out derived arrays (recomputed on load)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=int, help="processes (default: up to 4)")
+    p.add_argument("--force", action="store_true", help="replace a prepared dataset already in --out")
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    common = dict(per_group=args.per_group, max_frames=args.max_frames, compact=args.compact, seed=args.seed,
+                  workers=args.workers, force=args.force)  # fmt: skip
+    try:
+        if args.dataset == "bvh":
+            from motiondiff.data.preparing.from_bvh import prepare_bvh
+
+            report = prepare_bvh(args.src, args.out, args.labels, args.joint_map, args.units_to_metres, **common)
+        else:
+            report = prepare_bandai(args.src, args.out, caption_variants=args.caption_variants,
+                                    rare_to_train=args.rare_to_train, held_out=args.held_out, **common)  # fmt: skip
+    except (PrepareError, SourceError, bandai.BandaiLayoutError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print_report(report, Path(args.out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())  # PrepareError lives in prepare_writer, so this __main__ copy catches what prepare_bvh raises

@@ -1,0 +1,1 @@
+"""The evaluator networks of the papers' protocol: text-motion evaluator, action classifiers, ST-GCN."""

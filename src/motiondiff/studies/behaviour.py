@@ -1,0 +1,245 @@
+"""Does the model do what the prompt says? The action classifier's verdict and measured facts of generated motion,
+next to real clips of the asked action.
+
+    python -m motiondiff.studies.behaviour [checkpoint=latest] [num_samples=10] [seed=0] [sampler=ddim steps=50]
+        [out=<folder>]
+
+For each prompt: how many samples the dataset's action classifier assigns the asked action (and what the rest
+become), distance travelled, wrists above the head and mean joint speed, with the same facts for the real clips of
+that label; a per-action table (behaviour.md) and a confusion matrix (behaviour_confusion.png) go to `out`. It
+samples with sample.py's default sampler (conf/sample.yaml), so the report shows what users get.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+from omegaconf import OmegaConf
+
+from motiondiff.data.preparing.captions import measure
+from motiondiff.data.representations.hml_features import joints_from_features
+from motiondiff.paths import CONF_DIR
+
+# prompt, seconds, dataset label of the real clips it should resemble
+DEFAULT_PROMPTS = (
+    ("a person walks forward", 4.0, "walk"),
+    ("a person runs", 4.0, "run"),
+    ("a person raises both hands", 3.0, "raise-up-both-hands"),
+    ("a person waves the right hand", 3.0, "wave-right-hand"),
+    ("a person kicks", 3.0, "kick"),
+    ("a person bows", 3.0, "bow"),
+)
+
+
+def default_sampler(conf_dir: Path = CONF_DIR) -> dict:
+    """sample.py's default sampler and steps, read from conf/sample.yaml and conf/sampler/<name>.yaml."""
+    defaults = OmegaConf.to_container(OmegaConf.load(conf_dir / "sample.yaml").defaults)
+    name = next(d["sampler"] for d in defaults if isinstance(d, dict) and "sampler" in d)
+    sampler = OmegaConf.load(conf_dir / "sampler" / f"{name}.yaml")
+    return {"sampler": str(sampler.name), "steps": sampler.get("steps")}
+
+
+@dataclass
+class Behaviour:
+    travel: np.ndarray  # metres of root displacement on the ground, per sample
+    both_wrists_up: np.ndarray  # bool: both wrists above the head for >= 0.3 s
+    any_wrist_up: np.ndarray  # bool: either wrist above the head for >= 0.3 s
+    speed: np.ndarray  # mean joint speed, m/s
+    accel: np.ndarray  # mean joint acceleration, m/s^2: frame-to-frame jitter shows here first
+
+    @classmethod
+    def of(cls, clips: list[np.ndarray], fps: float) -> Behaviour:
+        facts = [measure(j, fps) for j in clips]
+        return cls(
+            travel=np.array([f.distance for f in facts]),
+            both_wrists_up=np.array([len(f.hands_above_head) == 2 for f in facts]),
+            any_wrist_up=np.array([len(f.hands_above_head) > 0 for f in facts]),
+            speed=np.array([mean_joint_speed(j, fps) for j in clips]),
+            accel=np.array([mean_joint_acceleration(j, fps) for j in clips]),
+        )
+
+    def walk_success(self) -> np.ndarray:
+        return (self.travel >= 1.5) & ~self.any_wrist_up
+
+    def in_place(self) -> np.ndarray:
+        return self.travel <= 0.5
+
+
+def mean_joint_speed(joints: np.ndarray, fps: float) -> float:
+    return float(np.linalg.norm(np.diff(joints, axis=0), axis=-1).mean() * fps)
+
+
+def mean_joint_acceleration(joints: np.ndarray, fps: float) -> float:
+    """Mean norm of the joints' second differences in m/s^2 (0 for clips under 3 frames)."""
+    if len(joints) < 3:
+        return 0.0
+    return float(np.linalg.norm(np.diff(joints, n=2, axis=0), axis=-1).mean() * fps**2)
+
+
+def generate(
+    module,
+    prompt: str | None,
+    seconds: float,
+    n: int,
+    seed: int,
+    guidance: float | None = None,
+    sampler: str = "ddim",
+    steps: int | None = None,
+    smooth_sigma: float | None = None,
+) -> list[np.ndarray]:
+    """n de-normalised feature sequences (frames, D) for a prompt (None: unconditioned), with the model's default
+    guidance unless given; ``smooth_sigma`` > 0: vvMDM's temporal filter on the joints (``smooth_features``)."""
+    from motiondiff.edit.smoothing import smooth_features
+    from motiondiff.lit.generation import generate_features
+
+    frames = min(round(seconds * module.hparams.fps), module.hparams.max_frames)
+    gen = torch.Generator().manual_seed(seed)
+    guidance = module.default_guidance if guidance is None else guidance
+    feats = generate_features(module, [prompt] * n, torch.full((n,), frames), batch_size=max(n, 1), generator=gen,
+                              guidance=guidance, sampler=sampler, steps=steps, progress=True)  # fmt: skip
+    return [smooth_features(f, smooth_sigma) for f in feats]
+
+
+def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test")) -> list[np.ndarray]:
+    """Canonical joints (first `max_frames`) of the real clips with this content label."""
+    from motiondiff.data.formats.prepared import load_split
+
+    clips = []
+    for split in splits:
+        data = load_split(root, split)
+        for i in range(data.num_clips):
+            if data.label("content", i) == label:
+                clips.append(data.arrays["joints"][data.clip_slice(i)][:max_frames])
+    return clips
+
+
+def sampling_args(args: dict[str, str]) -> dict:
+    """sampler=, steps=, guidance=, smooth_sigma= of a key=value command line over sample.py's default sampler."""
+    sampling = default_sampler() if "sampler" not in args else {"sampler": args["sampler"], "steps": None}
+    if "steps" in args:
+        sampling["steps"] = int(args["steps"])
+    if "guidance" in args:
+        sampling["guidance"] = float(args["guidance"])
+    if "smooth_sigma" in args:
+        sampling["smooth_sigma"] = float(args["smooth_sigma"]) or None
+    return sampling
+
+
+def classify(evaluators, features: list[np.ndarray]) -> np.ndarray:
+    """The action classifier's label id for each clip of features."""
+    return evaluators.embed_motion(features)["action_logits"].argmax(-1)
+
+
+def report(module, data_root, n: int = 10, seed: int = 0, evaluators=None, prompts=DEFAULT_PROMPTS, **sampling) -> dict:
+    """{prompt: {"label", "generated": Behaviour, "real": Behaviour, "predicted": names or None}} + unconditioned.
+    An action-conditioned model is asked with each prompt's label instead of its text (labels it lacks are left
+    out), so both kinds of model are measured on the same actions."""
+    fps = module.hparams.fps
+    names = evaluators.action_names if evaluators is not None and evaluators.action else None
+    if module.condition_kind == "action":
+        known = set(module.hparams.action_names)
+        prompts = tuple((label, seconds, label) for _, seconds, label in prompts if label in known)
+    rows = {}
+    for prompt, seconds, label in prompts:
+        frames = round(seconds * fps)
+        feats = generate(module, prompt, seconds, n, seed, **sampling)
+        real = real_clips(data_root, label, frames)
+        rows[prompt] = {
+            "label": label,
+            "generated": Behaviour.of([joints_from_features(f) for f in feats], fps),
+            "real": Behaviour.of(real, fps) if real else None,
+            "predicted": [names[i] for i in classify(evaluators, feats)] if names else None,
+        }
+    if module.condition_kind == "text":
+        uncond = generate(module, None, 4.0, n, seed, **sampling)
+        rows["(unconditioned)"] = {"label": None, "generated": Behaviour.of([joints_from_features(f) for f in uncond],
+                                                                              fps), "real": None, "predicted": None}  # fmt: skip
+    return rows
+
+
+def print_report(rows: dict) -> None:
+    """Counts per prompt; "walk ok" = travelled >= 1.5 m with no wrist above the head; "as asked" = samples the
+    action classifier assigns the prompt's label."""
+    print(f"{'prompt':<31}{'who':>10}{'n':>4}{'as asked':>9}{'travel m':>9}{'travel>=1.5m':>13}{'walk ok':>8}"
+          f"{'travel<=0.5m':>13}{'2 wrists up':>12}{'no wrist up':>12}{'speed m/s':>10}{'acc m/s2':>9}")  # fmt: skip
+    for prompt, row in rows.items():
+        for who in ("generated", "real"):
+            b = row.get(who)
+            if b is None:
+                continue
+            k = len(b.travel)
+            asked = "" if who == "real" or row["predicted"] is None else str(row["predicted"].count(row["label"]))
+            print(f"{prompt:<31}{who:>10}{k:>4}{asked:>9}{np.median(b.travel):>9.2f}{int((b.travel >= 1.5).sum()):>13}"
+                  f"{int(b.walk_success().sum()):>8}{int(b.in_place().sum()):>13}"
+                  f"{int(b.both_wrists_up.sum()):>12}{int((~b.any_wrist_up).sum()):>12}{b.speed.mean():>10.2f}"
+                  f"{b.accel.mean():>9.1f}")  # fmt: skip
+
+
+def markdown_report(rows: dict, header: list[str]) -> str:
+    """behaviour.md: per prompt, the classifier's verdicts and travel/speed next to the real clips'."""
+    lines = ["### Behaviour report", "", *[f"- {h}" for h in header], "",
+             "| prompt | asked action | classified as asked | classified as (others) | median travel m (real) "
+             "| mean joint speed m/s (real) | mean joint acceleration m/s² (real) |", "|---|---|---:|---|---:|---:|---:|"]  # fmt: skip
+    for prompt, row in rows.items():
+        if row["label"] is None:
+            continue
+        gen, real, pred = row["generated"], row["real"], row["predicted"] or []
+        others = {p: pred.count(p) for p in dict.fromkeys(pred) if p != row["label"]}
+        other_text = ", ".join(f"{p} {c}" for p, c in sorted(others.items(), key=lambda x: -x[1]))
+        real_travel = f" ({np.median(real.travel):.2f})" if real is not None else " (no real clip)"
+        real_speed = f" ({real.speed.mean():.2f})" if real is not None else ""
+        real_accel = f" ({real.accel.mean():.1f})" if real is not None else ""
+        lines.append(f"| {prompt} | {row['label']} | {pred.count(row['label'])} of {len(gen.travel)} | {other_text} | "
+                     f"{np.median(gen.travel):.2f}{real_travel} | {gen.speed.mean():.2f}{real_speed} | "
+                     f"{gen.accel.mean():.1f}{real_accel} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str]) -> None:
+    import os
+    import time
+
+    from motiondiff.eval import action_table
+    from motiondiff.eval.protocol import Evaluators
+    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.paths import REPO_DIR, find_checkpoint, work_dir
+
+    args = dict(a.split("=", 1) for a in argv)
+    outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))
+    ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
+    module = load_module(ckpt)
+    dataset = module.hparams.get("dataset") or "bandai_mini"
+    data_root = args.get("data", str(REPO_DIR / "data" / dataset))
+    evaluator_dir = Path(args.get("evaluators", REPO_DIR / "checkpoints" / "evaluators" / dataset))
+    evaluators = Evaluators.load(evaluator_dir, module.hparams.num_joints).for_module(module) if any(
+        evaluator_dir.glob("action.safetensors")) else None  # fmt: skip
+    sampling = sampling_args(args)
+    sampling.setdefault("smooth_sigma", module.default_smooth_sigma)  # what sample.py gives users by default
+    guidance = sampling.get("guidance", module.default_guidance)
+    header = [f"checkpoint: {ckpt}", f"sampler: {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
+              f"guidance {guidance:g}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}, "
+              f"seed {args.get('seed', 0)}",
+              f"classifier: {evaluator_dir if evaluators else 'none (no action.safetensors): no verdicts'}"]  # fmt: skip
+    print("\n".join(header))
+    rows = report(module, data_root, int(args.get("num_samples", 10)), int(args.get("seed", 0)), evaluators,
+                  **sampling)  # fmt: skip
+    print_report(rows)
+    out = Path(args.get("out", outputs / "behaviour" / time.strftime("%Y-%m-%d_%H-%M-%S")))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "behaviour.md").write_text(markdown_report(rows, header))
+    if evaluators is not None:
+        names = evaluators.action_names
+        asked = [names.index(r["label"]) for r in rows.values() if r["predicted"] and r["label"] in names
+                 for _ in r["predicted"]]  # fmt: skip
+        got = [names.index(p) for r in rows.values() if r["predicted"] and r["label"] in names for p in r["predicted"]]
+        action_table.plot_confusion(action_table.confusion(asked, got, len(names)), names,
+                                    out / "behaviour_confusion.png", "behaviour prompts: asked vs classified")  # fmt: skip
+    print(f"written to {out}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

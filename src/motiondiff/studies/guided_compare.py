@@ -1,0 +1,280 @@
+"""GuidedMotion against plain MDM on the complex-motion test split, its Tab. 4-style ablation and sampling times
+(issue 7). Captions are **generated** (joined real clips, `data/bandai_mini_compositional`).
+
+    python -m motiondiff.studies.guided_compare latent=<train_latent.py ckpt> mdm=<train.py ckpt>
+        [local_model=<ckpt>] [replications=5] [level_steps=15,15,20] [mdm_steps=50] [local_frames=60]
+        [timing_repeats=5] [timing_only=false] [seed=0] [out=<prefix>] [data=<prepared dir>] [evaluators=<dir>]
+
+Every row samples the same test captions at the real clips' lengths, and goes through the same evaluators
+(`checkpoints/evaluators/bandai_mini_compositional`): R-precision, FID, MM-Dist and Diversity, mean ± 95% CI over
+the replications (new noise and new local actions each time). The local actions of the guided rows are generated
+by ``local_model`` (default: the compared MDM model itself, so GuidedMotion uses no model that MDM lacks); their
+descriptions come from each caption's semantic graph. Writes <out>.md and <out>.json
+(default docs/results/guidedmotion/comparison); ``timing_only=true`` measures only the sampling times, into
+<out>_timing.md/.json. Times use the process's torch threads (set OMP_NUM_THREADS to compare machines).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from motiondiff.bench.timing import median_seconds as timed_median
+from motiondiff.errors import UsageError
+from motiondiff.eval.report import format_markdown, summarise, write_markdown
+from motiondiff.lit.conditions import text_encoder_kwargs
+from motiondiff.paths import REPO_DIR
+from motiondiff.scripting import key_value_args
+
+KEYS = ("latent", "mdm", "local_model", "replications", "level_steps", "mdm_steps", "local_frames",
+        "timing_repeats", "timing_only", "seed", "out", "data", "evaluators")  # fmt: skip
+DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "comparison"
+# Tab. 4's rows: (level the hierarchy stops at and decodes, local-action energy guidance on)
+ABLATION = {
+    "motion level": ("motion", False),
+    "motion + action levels": ("action", False),
+    "all three levels": ("specific", False),
+    "motion + action levels + guidance": ("action", True),
+    "GuidedMotion (all levels + guidance)": ("specific", True),
+}
+MDM_ROW = "MDM (x0, DDIM-{steps})"
+
+
+def local_latents(latent, mdm, graphs, frames: int, generator: torch.Generator, steps: int = 50) -> torch.Tensor:
+    """(B, A_max, Q_a, D') standardised action-level latents c^k: one MDM motion per local description of each
+    caption graph (all descriptions in batched calls), zero rows past a caption's action count."""
+    from motiondiff.eval.protocol import generate
+    from motiondiff.guided.local_actions import encode_local_motions
+
+    texts = [g.action_texts() for g in graphs]
+    flat = [t for ts in texts for t in ts]
+    motions = generate(mdm, flat, torch.full((len(flat),), frames), generator=generator, guidance=mdm.default_guidance,
+                       sampler="ddim", steps=steps)  # fmt: skip
+    encoded = encode_local_motions(latent, [torch.as_tensor(m) for m in motions])
+    out = torch.zeros(len(graphs), max(max(len(ts) for ts in texts), 1), *encoded.shape[1:])
+    k = 0
+    for i, ts in enumerate(texts):
+        out[i, : len(ts)] = encoded[k : k + len(ts)]
+        k += len(ts)
+    return out
+
+
+def guided_features(latent, table, captions, lengths, steps, final_level, refs, generator, batch_size=64):
+    """De-normalised GuidedMotion features, one per caption, at its length (``refs``: local latents or None)."""
+    from motiondiff.models.graph import batch_graphs
+    from motiondiff.text.parse import ROLES
+
+    out = []
+    for s in range(0, len(captions), batch_size):
+        chunk = captions[s : s + batch_size]
+        graphs = batch_graphs([table[c][0] for c in chunk], [table[c][1] for c in chunk], ROLES)
+        lens = lengths[s : s + batch_size]
+        kwargs = {} if refs is None else {"local_latents": refs[s : s + batch_size]}
+        feats = latent.sample(graphs, lens, steps=steps, final_level=final_level, generator=generator, **kwargs)
+        feats = latent.denormalise(feats).cpu().numpy()
+        out += [feats[i, : int(n)] for i, n in enumerate(lens)]
+    return out
+
+
+def replication(latent, mdm, local_mdm, evaluators, clips, table, r: int, args: dict) -> dict[str, dict]:
+    from motiondiff.eval.protocol import generate, replication_metrics
+
+    seed = int(args["seed"]) * 1000 + r
+    captions = clips.pick_captions(np.random.default_rng(seed))
+    lengths = clips.lengths
+    real = evaluators.embed_motion(clips.features)
+    text = evaluators.embed_text(captions)
+    graphs = [table[c][0] for c in captions]
+    refs = local_latents(latent, local_mdm, graphs, args["local_frames"], torch.Generator().manual_seed(seed),
+                         args["mdm_steps"])  # fmt: skip
+    rows = {}
+    for name, (level, guided) in ABLATION.items():
+        feats = guided_features(latent, table, captions, lengths, args["level_steps"], level, refs if guided else None,
+                                torch.Generator().manual_seed(seed))  # fmt: skip
+        rows[name] = replication_metrics("text", evaluators, real, evaluators.embed_motion(feats), text=text, seed=seed)
+    feats = generate(mdm, captions, lengths, generator=torch.Generator().manual_seed(seed),
+                     guidance=mdm.default_guidance, sampler="ddim", steps=args["mdm_steps"])  # fmt: skip
+    name = MDM_ROW.format(steps=args["mdm_steps"])
+    rows[name] = replication_metrics("text", evaluators, real, evaluators.embed_motion(feats), text=text, seed=seed)
+    return rows
+
+
+def median_seconds(fn, repeats: int) -> float:
+    """Median of ``repeats`` timed calls after one untimed warm-up (the bench's helper)."""
+    return timed_median(fn, repeats=repeats, warmup=1)["median_s"]
+
+
+def sampling_times(latent, mdm, local_mdm, table, caption: str, frames: int, args: dict) -> dict[str, float]:
+    """Median seconds for one motion of ``frames`` frames from ``caption``, guidance on, in this process."""
+    from motiondiff.lit.conditions import condition_batch
+    from motiondiff.models.graph import batch_graphs
+    from motiondiff.text.parse import ROLES
+
+    graph, feats = table[caption]
+    graphs = batch_graphs([graph], [feats], ROLES)
+    lengths = torch.tensor([frames])
+    refs = local_latents(latent, local_mdm, [graph], args["local_frames"], torch.Generator().manual_seed(0),
+                         args["mdm_steps"])  # fmt: skip
+    steps, repeats = args["level_steps"], args["timing_repeats"]
+    cond = condition_batch(mdm, [caption])
+    times = {
+        "guidedmotion_latent_s": median_seconds(
+            lambda: latent.sample(graphs, lengths, steps=steps, local_latents=refs), repeats
+        ),
+        "guidedmotion_local_actions_s": median_seconds(
+            lambda: local_latents(
+                latent, local_mdm, [graph], args["local_frames"], torch.Generator().manual_seed(0), args["mdm_steps"]
+            ),
+            repeats,
+        ),
+        "mdm_s": median_seconds(
+            lambda: mdm.sample(cond, lengths, guidance=mdm.default_guidance, sampler="ddim", steps=args["mdm_steps"]),
+            repeats,
+        ),
+    }
+    times["guidedmotion_total_s"] = times["guidedmotion_latent_s"] + times["guidedmotion_local_actions_s"]
+    times["local_actions"] = len(graph.action_ids())
+    times["threads"] = torch.get_num_threads()
+    return times
+
+
+def training_seconds(checkpoint: Path) -> dict | None:
+    """run.json of the training run that wrote ``checkpoint`` (<run>/checkpoints/<file>), if there is one."""
+    meta = checkpoint.resolve().parent.parent / "run.json"
+    return json.loads(meta.read_text()) if meta.is_file() else None
+
+
+def timing_lines(times: dict, meta: dict) -> list[str]:
+    return [
+        f"### Sampling time per motion ({times['frames']} frames, guidance on; median of {meta['timing_repeats']}; "
+        f"{times['threads']} torch thread{'s' if times['threads'] > 1 else ''})",
+        "",
+        "| what | seconds |",
+        "|---|---:|",
+        f"| GuidedMotion latent sampling, {meta['level_steps_text']} level steps (50 in all) + VAE decoding | "
+        f"{times['guidedmotion_latent_s']:.3f} |",
+        f"| GuidedMotion local actions: {times['local_actions']} MDM motions (DDIM-{meta['mdm_steps']}, one batch) "
+        f"+ action-VAE encoding | {times['guidedmotion_local_actions_s']:.3f} |",
+        f"| GuidedMotion in all | {times['guidedmotion_total_s']:.3f} |",
+        f"| MDM, DDIM-{meta['mdm_steps']} | {times['mdm_s']:.3f} |",
+        "",
+    ]
+
+
+def write_timing(out: Path, times: dict, meta: dict) -> None:
+    """``timing_only=true``: the sampling times alone, in <out>_timing.md/.json (the comparison files stay)."""
+    out = out.with_name(out.name + "_timing")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    lines = ["# GuidedMotion vs MDM: sampling time per motion", "", f"Latent model `{meta['latent']}`; MDM `{meta['mdm']}`.",
+             "", *timing_lines(times, meta), f"Command: `{meta['command']}`", ""]  # fmt: skip
+    write_markdown(out.with_suffix(".md"), "\n".join(lines))
+    out.with_suffix(".json").write_text(json.dumps({**meta, "times": times}, indent=1))
+
+
+def write(out: Path, rows: dict, times: dict, meta: dict) -> None:
+    out.parent.mkdir(parents=True, exist_ok=True)
+    summaries = {name: summarise(reps) for name, reps in rows.items()}
+    n = meta["replications"]
+    main_rows = {k: summaries[k] for k in (list(ABLATION)[-1], meta["mdm_row"])}
+    lines = [
+        "# GuidedMotion vs MDM on the complex-motion test split",
+        "",
+        f"{meta['clips']} test sequences of `{meta['data']}` (2-3 joined real Bandai Namco clips each, >= 3 local "
+        "actions, 150-196 frames; captions are **generated**). Evaluators: "
+        f"`{meta['evaluators']}` (trained on this dataset). Mean ± 95% CI over {n} replications.",
+        "",
+        format_markdown(main_rows, "text", title="Evaluation"),
+        format_markdown({k: summaries[k] for k in ABLATION}, "text", title="Ablation (paper Tab. 4 style)"),
+        "### Training time (this 2-core CPU, seconds of wall time)",
+        "",
+        *[f"- {k}: {v}" for k, v in meta["training"].items()],
+        "",
+        *timing_lines(times, meta),
+        f"Command: `{meta['command']}`",
+        "",
+    ]
+    write_markdown(out.with_suffix(".md"), "\n".join(lines))
+    payload = {**meta, "times": times, "summaries": {k: {m: list(v) for m, v in s.items()} for k, s in summaries.items()},
+               "replications_raw": rows}  # fmt: skip
+    out.with_suffix(".json").write_text(json.dumps(payload, indent=1))
+
+
+def main(argv: list[str] | None = None) -> int:
+    from motiondiff.data.datamodules import PreparedDataModule
+    from motiondiff.eval.protocol import EvalClips, Evaluators
+    from motiondiff.guided.local_actions import check_same_features
+    from motiondiff.lit.latent import HierarchicalLatentModule
+    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.paths import find_checkpoint
+    from motiondiff.text.encoders import build_text_encoder
+    from motiondiff.text.graph_features import graph_table
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = key_value_args(argv, KEYS)
+    if "latent" not in args or "mdm" not in args:
+        raise UsageError("usage: python -m motiondiff.studies.guided_compare latent=<train_latent.py ckpt> "
+                         "mdm=<train.py ckpt> [key=value ...]")  # fmt: skip
+    latent_path = Path(args["latent"])
+    mdm_path = find_checkpoint(args["mdm"], REPO_DIR / "outputs")
+    latent = HierarchicalLatentModule.load_from_checkpoint(latent_path, map_location="cpu", weights_only=True).eval()
+    mdm = load_module(mdm_path)
+    local_path = find_checkpoint(args.get("local_model", str(mdm_path)), REPO_DIR / "outputs")
+    local_mdm = mdm if local_path == mdm_path else load_module(local_path)
+    check_same_features(local_mdm, latent)
+    check_same_features(mdm, latent)
+    settings = {
+        "replications": int(args.get("replications", 5)),
+        "level_steps": dict(
+            zip(("motion", "action", "specific"), map(int, args.get("level_steps", "15,15,20").split(",")), strict=True)
+        ),
+        "mdm_steps": int(args.get("mdm_steps", 50)),
+        "local_frames": int(args.get("local_frames", 60)),
+        "timing_repeats": int(args.get("timing_repeats", 5)),
+        "seed": int(args.get("seed", 0)),
+    }
+    data = Path(args.get("data", REPO_DIR / "data" / "bandai_mini_compositional"))
+    dm = PreparedDataModule(data, max_frames=196)
+    dm.setup("test")
+    clips = EvalClips.from_dataset(dm.dataset("test"))
+    evaluator_dir = Path(args.get("evaluators", REPO_DIR / "checkpoints" / "evaluators" / data.name))
+    evaluators = Evaluators.load(evaluator_dir).for_module(mdm)
+    encoder = build_text_encoder(**text_encoder_kwargs(latent.hparams.text_encoder))
+    table = graph_table([c for caps in clips.captions for c in caps], encoder)
+    timing_only = args.get("timing_only", "false").lower() in ("1", "true", "yes")
+    rows: dict[str, list[dict]] = {}
+    for r in range(0 if timing_only else settings["replications"]):
+        start = time.perf_counter()
+        for name, metrics in replication(latent, mdm, local_mdm, evaluators, clips, table, r, settings).items():
+            rows.setdefault(name, []).append(metrics)
+        print(f"replication {r + 1}/{settings['replications']} in {time.perf_counter() - start:.0f} s", flush=True)
+    frames = int(clips.lengths.max())
+    times = {"frames": frames, **sampling_times(latent, mdm, local_mdm, table, clips.captions[0][0], frames, settings)}
+    latent_run, mdm_run = training_seconds(latent_path), training_seconds(mdm_path)
+    training = {"GuidedMotion latent stage": (latent_run or {}).get("train_seconds", "unknown")}
+    for level, path in ((latent_run or {}).get("vaes") or {}).items():
+        training[f"GuidedMotion {level} VAE"] = (training_seconds(Path(path)) or {}).get("train_seconds", "unknown")
+    training["MDM"] = (mdm_run or {}).get("train_seconds", "unknown")
+    meta = {**settings, "latent": str(latent_path), "mdm": str(mdm_path), "local_model": str(local_path),
+            "data": str(data.relative_to(REPO_DIR) if data.is_relative_to(REPO_DIR) else data),
+            "evaluators": str(evaluator_dir.relative_to(REPO_DIR) if evaluator_dir.is_relative_to(REPO_DIR)
+                              else evaluator_dir),
+            "clips": len(clips), "mdm_row": MDM_ROW.format(steps=settings["mdm_steps"]), "training": training,
+            "level_steps_text": "/".join(str(v) for v in settings["level_steps"].values()),
+            "command": "python -m motiondiff.studies.guided_compare " + " ".join(argv)}  # fmt: skip
+    out = Path(args.get("out", DEFAULT_OUT))
+    if timing_only:
+        write_timing(out, times, meta)
+        print(json.dumps(times, indent=1))
+        return 0
+    write(out, rows, times, meta)
+    print(Path(out.with_suffix(".md")).read_text())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
