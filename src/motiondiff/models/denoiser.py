@@ -23,7 +23,7 @@ from motiondiff.models.conditioning import build_condition
 from motiondiff.models.embeddings import TimestepEmbedder
 
 # Network sizes as data, so configs and benchmarks can pick or edit them. "paper" = MDM appendix C (17.88 M params).
-# Mirrors conf/model/*.yaml (what train.py uses); tests/unit/test_models.py checks they agree.
+# Mirrors conf/model/*.yaml (what train.py uses); tests/unit/models/test_models.py checks they agree.
 PRESETS: dict[str, dict[str, Any]] = {
     "paper": dict(d_model=512, num_layers=8, num_heads=4, ff_size=1024, dropout=0.1, activation="gelu"),
     "cpu": dict(d_model=128, num_layers=4, num_heads=4, ff_size=256, dropout=0.1, activation="gelu"),

@@ -4,7 +4,7 @@ MDM's recurrent baseline feeds each frame together with the time + condition tok
 PyTorch GRU with hidden size d = 512; it was best with 2 layers (not the transformers' 8), 4.47 M parameters in all,
 and the weakest backbone of the ablation (FID 4.569). Here the token is concatenated to the projected frame
 embedding, so the first GRU layer reads 2d features (MDM concatenates it to the raw features before its input
-Linear; the function class is the same, the parameter count is not - see tests/unit/test_backbones.py).
+Linear; the function class is the same, the parameter count is not - see tests/unit/models/test_backbones.py).
 
 Padding: the frames are packed (pack_padded_sequence), so the recurrence stops at each clip's last valid frame and
 padded frames never reach a valid one; padded outputs are zeros. Valid frames must be a prefix of each row.

@@ -191,7 +191,7 @@ def test_presets_match_the_hydra_model_configs():
 
     import yaml
 
-    conf = Path(__file__).resolve().parents[2] / "conf" / "model"
+    conf = Path(__file__).resolve().parents[3] / "conf" / "model"
     for name, arch in PRESETS.items():
         spec = yaml.safe_load((conf / f"{name}.yaml").read_text())
         assert {k: spec[k] for k in arch} == arch, name

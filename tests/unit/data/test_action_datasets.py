@@ -19,7 +19,7 @@ from motiondiff.safe_pickle import load_pickle
 from motiondiff.skeleton import SMPL22
 
 _spec = importlib.util.spec_from_file_location(
-    "action_layouts", Path(__file__).parents[1] / "fixtures" / "action_layouts.py"
+    "action_layouts", Path(__file__).parents[2] / "fixtures" / "action_layouts.py"
 )
 layouts = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(layouts)

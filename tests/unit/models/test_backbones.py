@@ -14,7 +14,7 @@ from motiondiff.lit.diffusion import _backbone_kwargs
 from motiondiff.models import BACKBONES, MDMDenoiser, build_backbone, build_condition, count_parameters
 from motiondiff.models.backbones import GRUBackbone, TransDecBackbone, UNetBackbone
 
-CONF = Path(__file__).resolve().parents[2] / "conf"
+CONF = Path(__file__).resolve().parents[3] / "conf"
 TINY = dict(d_model=32, num_layers=2, num_heads=4, ff_size=64, dropout=0.1, activation="gelu")
 D = 12  # feature dim of the toy motion
 # name -> (registry name, extra backbone kwargs)

@@ -12,7 +12,7 @@ import torch
 from motiondiff.bench.flops import count_flops, matmul_flops_per_s
 from motiondiff.bench.timing import PeakMemory, median_seconds
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 def test_flops_of_a_linear_layer_are_two_per_multiply_add():
