@@ -10,6 +10,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
+from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError
 from motiondiff.errors import UsageError
 from motiondiff.paths import REPO_DIR, work_dir
 
@@ -38,15 +39,17 @@ def quiet_tool_caches() -> None:
     os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")
 
 
+USER_ERRORS = (UsageError, DatasetNotFoundError, RepresentationError)  # reported as one line, exit code 2
+
+
 def user_errors(fn):
     """Report user errors as one clear line instead of a traceback."""
-    from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
-        except (UsageError, DatasetNotFoundError, RepresentationError) as err:
+        except USER_ERRORS as err:
             print(f"error: {err}", file=sys.stderr)
             sys.exit(2)
 

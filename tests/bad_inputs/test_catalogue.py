@@ -1,7 +1,7 @@
 """The catalogue of bad inputs (issue 9): every mistake a user can make with data, commands or files gets one clear
 error of a known type whose message names the fix, and leaves no partial output behind.
 
-Each case runs in this process (`harness.run_entry` composes the entry point's config as the command line would),
+Each case runs in this process (`fixtures.in_process.run_entry` composes the entry point's config as the command line would),
 so the catalogue stays fast. A few inputs are not errors but must still be handled cleanly (non-ASCII text,
 an empty captions file, a zero-length clip); they are at the end.
 """
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from harness import REPO, files_under, run_entry
+from fixtures.in_process import REPO, files_under, run_entry
 
 sys.path.insert(0, str(REPO / "tests" / "e2e"))
 from cli_helpers import write_kit_layout  # noqa: E402

@@ -8,6 +8,7 @@ import json
 
 import pytest
 from cli_helpers import REPO, TINY, run_cli
+from fixtures.in_process import run_entry
 
 EVALUATORS = REPO / "checkpoints" / "evaluators" / "bandai_mini"
 # the paper preset itself, on the embedded data with its text encoder and the CPU trainer (HumanML3D and CLIP are
@@ -30,13 +31,15 @@ def test_t10_preset_trains_evaluates_and_samples(tmp_path):
     assert any(r.get("val/fid") for r in rows), "the in-training evaluation logged no FID"
     ckpt = run / "checkpoints" / "last.ckpt"
 
-    run_cli("evaluate.py", f"checkpoint={ckpt}", "dataset=bandai_mini", "replications=1", "mm_replications=0",
-            "wandb=false", env_dir=tmp_path)  # fmt: skip
-    metrics = json.loads(next((tmp_path / "outputs").glob("evaluate/*/metrics.json")).read_text())
+    # evaluate.py and sample.py in-process (their command lines are tested elsewhere; a subprocess adds 9 s each)
+    _, out = run_entry("evaluate", tmp_path / "evaluate", f"checkpoint={ckpt}", "dataset=bandai_mini",
+                       "replications=1", "mm_replications=0", "wandb=false")  # fmt: skip
+    metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["steps"] == 10 and metrics["summary"]["fid"][0] > 0  # DDIM over the whole 10-step chain
 
-    run_cli("sample.py", f"checkpoint={ckpt}", "text=a person walks", "num_samples=1", "export=none",
-            env_dir=tmp_path)  # the default sampler, fitted to T  # fmt: skip
+    _, out = run_entry("sample", tmp_path / "sample", f"checkpoint={ckpt}", "text=a person walks", "num_samples=1",
+                       "export=none")  # the default sampler, fitted to T  # fmt: skip
+    assert json.loads((out / "results.json").read_text())["steps"] == 10
     from omegaconf import OmegaConf
 
     from motiondiff.cli.common import sampling_steps
