@@ -8,7 +8,7 @@ import json
 import pytest
 import torch
 from cli_helpers import REPO, TINY, run_cli
-from fixtures.in_process import user_error
+from fixtures.in_process import run_entry, user_error
 
 EVALUATORS = REPO / "checkpoints" / "evaluators" / "bandai_mini"
 FAST_EVAL = ["callbacks.evaluation.num_clips=12", "callbacks.evaluation.steps=4"]
@@ -73,13 +73,13 @@ def test_evaluate_refuses_a_checkpoint_of_another_dataset(text_ckpt, tmp_path):
                                                      "wandb=false")  # fmt: skip
 
 
-def test_evaluation_off_alone_trains_without_a_best_fid_checkpoint(tmp_path):
+def test_evaluation_off_alone_trains_without_a_best_fid_checkpoint(tmp_path, caplog):
     """``callbacks.evaluation=null`` is enough: the best-FID checkpoint (which nothing would feed) goes with it."""
-    proc = run_cli("train.py", *TINY, "trainer.max_steps=8", "trainer.check_val_every_n_epoch=1",
-                   "checkpoint_every=100", "callbacks.evaluation=null", env_dir=tmp_path)  # fmt: skip
-    run = next((tmp_path / "outputs").glob("train/*"))
+    caplog.set_level("INFO", logger="motiondiff.cli.train")
+    _, run = run_entry("train", tmp_path, *TINY, "trainer.max_steps=8", "trainer.check_val_every_n_epoch=1",
+                       "checkpoint_every=100", "callbacks.evaluation=null")  # fmt: skip
     assert (run / "checkpoints" / "last.ckpt").is_file() and not list(run.glob("checkpoints/best-fid-*"))
-    assert "no best-FID checkpoint either" in proc.stdout + proc.stderr
+    assert "no best-FID checkpoint either" in caplog.text
 
 
 def test_unconstrained_jp_model_with_smoothing_reports_its_own_feature_smoothness(tmp_path):

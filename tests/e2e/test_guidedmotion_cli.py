@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import torch
 from cli_helpers import run_cli
+from fixtures.in_process import run_entry
 
 DATA = ["dataset=bandai_mini_compositional", "logger=csv", "trainer.log_every_n_steps=1", "batch_size=128"]
 TINY_VAE = ["vae.d_model=32", "vae.num_layers=1", "vae.num_heads=2", "vae.ff_size=64", "vae.latent_dim=16",
@@ -22,14 +23,15 @@ CAPTION = "a person walks forward, then raises both hands"
 
 @pytest.fixture(scope="module")
 def latent_ckpt(tmp_path_factory) -> tuple[Path, Path]:
+    """The trainings run in-process (train_vae.py's and train_latent.py's configs and runs; 9 s of imports saved
+    each); sample.py below goes through the command line."""
     work = tmp_path_factory.mktemp("guided")
     vaes = []
     for level in ("motion", "action", "specific"):
-        run_cli("train_vae.py", f"level={level}", *DATA, *TINY_VAE, env_dir=work)
-        vaes.append(f"vae.{level}={next((work / 'outputs' / 'vae' / level).glob('*/checkpoints/last.ckpt'))}")
-    run_cli("train_latent.py", *vaes, *DATA, *TINY_LATENT, env_dir=work)
-    ckpt = next((work / "outputs" / "latent").glob("*/checkpoints/last.ckpt"))
-    return work, ckpt
+        _, run = run_entry("train_vae", work / f"vae_{level}", f"level={level}", *DATA, *TINY_VAE)
+        vaes.append(f"vae.{level}={run / 'checkpoints' / 'last.ckpt'}")
+    _, run = run_entry("train_latent", work / "latent", *vaes, *DATA, *TINY_LATENT)
+    return work, run / "checkpoints" / "last.ckpt"
 
 
 def test_latent_checkpoint_holds_the_three_levels_and_loads_without_pickled_code(latent_ckpt):

@@ -1,6 +1,7 @@
 """`python evaluate.py evaluator=official official_dir=<MDM's layout>` runs end to end for KIT (text-motion
 evaluator), HumanAct12 (the real action-to-motion classifier on 24 joints) and UESTC (ST-GCN, FID against train and
-test), each on a tiny model trained by train.py on a fixture in the dataset's official layout."""
+test), each on a tiny model trained by train.py on a fixture in the dataset's official layout. The commands' configs and
+runs are called in-process (`fixtures.in_process`; a subprocess adds 9 s of imports and nothing these tests check)."""
 
 from __future__ import annotations
 
@@ -8,20 +9,22 @@ import json
 
 import numpy as np
 import pytest
-from cli_helpers import TINY, run_cli, write_kit_layout
+from cli_helpers import TINY, write_kit_layout
+from fixtures.in_process import run_entry
 from fixtures.official_layouts import write_official_action, write_official_t2m
 
 FAST_EVAL = ["replications=1", "mm_replications=0", "sampler=ddim", "steps=2", "wandb=false", "batch_size=16"]
 
 
 def _train(tmp_path, *overrides) -> str:
-    run_cli("train.py", *TINY, "trainer.max_steps=2", "checkpoint_every=2",
-            *overrides, env_dir=tmp_path)  # fmt: skip
-    return str(next((tmp_path / "outputs").glob("train/*/checkpoints/last.ckpt")))
+    _, run = run_entry("train", tmp_path / "train", *TINY, "trainer.max_steps=2", "checkpoint_every=2", *overrides)
+    return str(run / "checkpoints" / "last.ckpt")
 
 
-def _metrics(tmp_path) -> dict:
-    return json.loads(next((tmp_path / "outputs").glob("evaluate/*/metrics.json")).read_text())
+def _evaluate(tmp_path, *overrides) -> tuple[dict, str]:
+    """metrics.json and table.md of an evaluate.py run."""
+    _, out = run_entry("evaluate", tmp_path / "evaluate", *overrides, *FAST_EVAL)
+    return json.loads((out / "metrics.json").read_text()), (out / "table.md").read_text()
 
 
 @pytest.mark.slow
@@ -31,10 +34,8 @@ def test_kit_with_the_official_text_motion_evaluator(shared, tmp_path):
     official = tmp_path / "official"
     write_official_t2m(official, shared("reference", "t2m_evaluator_state_dict_layout.txt").read_text(), "kit", 251)
     ckpt = _train(tmp_path, "dataset=kit", f"dataset.root={root}")
-    run_cli("evaluate.py", f"checkpoint={ckpt}", "dataset=kit", f"dataset.root={root}", "evaluator=official",
-            f"official_dir={official}", *FAST_EVAL, env_dir=tmp_path)  # fmt: skip
-    summary = _metrics(tmp_path)
-    table = next((tmp_path / "outputs").glob("evaluate/*/table.md")).read_text()
+    summary, table = _evaluate(tmp_path, f"checkpoint={ckpt}", "dataset=kit", f"dataset.root={root}",
+                               "evaluator=official", f"official_dir={official}")  # fmt: skip
     assert "R-Precision top-3" in table and np.isfinite(summary["summary"]["fid"][0])
 
 
@@ -49,12 +50,11 @@ def test_action_datasets_with_the_official_classifiers(shared, tmp_path, dataset
     official = tmp_path / "official"
     write_official_action(official, shared("reference", "action-recognition"))
     ckpt = _train(tmp_path, f"dataset={dataset}", f"dataset.root={root}", "condition=action")
-    run_cli("evaluate.py", f"checkpoint={ckpt}", f"dataset={dataset}", f"dataset.root={root}", "evaluator=official",
-            f"official_dir={official}", *FAST_EVAL, env_dir=tmp_path)  # fmt: skip
-    metrics = _metrics(tmp_path)["summary"]
+    results, table = _evaluate(tmp_path, f"checkpoint={ckpt}", f"dataset={dataset}", f"dataset.root={root}",
+                               "evaluator=official", f"official_dir={official}")  # fmt: skip
+    metrics = results["summary"]
     for key in ("fid", "accuracy", "diversity"):
         assert np.isfinite(metrics[key][0]), key
-    table = next((tmp_path / "outputs").glob("evaluate/*/table.md")).read_text()
     # UESTC's test subjects are not its train subjects: MDM Table 4 reports FID against both. HumanAct12 trains on
     # every clip and is evaluated against them, so there is one FID.
     assert ("FID (train)" in table) == (dataset == "uestc") and ("fid_train" in metrics) == (dataset == "uestc")
