@@ -84,7 +84,7 @@ def test_comparison_with_mdm_and_the_level_ablation_writes_every_row(latent_ckpt
 
     work, ckpt = latent_ckpt
     out = work / "comparison"
-    main([f"latent={ckpt}", "mdm=shipped", "replications=2", "level_steps=2,2,2", "mdm_steps=2", "local_frames=20",
+    main([f"latent={ckpt}", "mdm=shipped", "replications=2", "level_steps=[2,2,2]", "mdm_steps=2", "local_frames=20",
           "timing_repeats=1", f"out={out}"])  # fmt: skip
     result = json.loads(out.with_suffix(".json").read_text())
     assert set(result["summaries"]) == {*ABLATION, result["mdm_row"]}
@@ -107,7 +107,7 @@ def test_timing_only_writes_the_sampling_times_and_leaves_the_comparison_alone(l
 
     work, ckpt = latent_ckpt
     out = work / "timing"
-    main([f"latent={ckpt}", "mdm=shipped", "timing_only=true", "level_steps=2,2,2", "mdm_steps=2", "local_frames=20",
+    main([f"latent={ckpt}", "mdm=shipped", "timing_only=true", "level_steps=[2,2,2]", "mdm_steps=2", "local_frames=20",
           "timing_repeats=1", f"out={out}"])  # fmt: skip
     assert not out.with_suffix(".md").exists()
     result = json.loads((work / "timing_timing.json").read_text())
@@ -122,7 +122,7 @@ def test_weight_control_report_measures_latent_and_decoded_distances(latent_ckpt
 
     work, ckpt = latent_ckpt
     out = work / "weights"
-    main([f"checkpoint={ckpt}", "captions=2", "samples=1", "weights=0,2", "level_steps=2,2,2", f"out={out}"])
+    main([f"checkpoint={ckpt}", "captions=2", "samples=1", "weights=[0,2]", "level_steps=[2,2,2]", f"out={out}"])
     result = json.loads(out.with_suffix(".json").read_text())
     assert [c["weight"] for c in result["curve"]] == [0.0, 2.0] and len(result["captions"]) == 2
     for row in result["captions"][0]["rows"]:

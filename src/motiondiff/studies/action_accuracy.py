@@ -2,6 +2,7 @@
 
     python -m motiondiff.studies.action_accuracy [checkpoint=latest] [captions=paraphrases|<file.json>]
         [num_samples=10] [seed=0] [sampler=ddim steps=50 guidance=...] [out=<folder>]
+        (every key and its default: conf/study/action_accuracy.yaml)
 
 Generates `num_samples` motions for every description of a held-out descriptions file (default: the human-style
 paraphrases of data/paraphrases/bandai_human.json, written before any model and kept out of training), each at the
@@ -78,32 +79,33 @@ def main(argv: list[str]) -> None:
 
     from motiondiff.eval.protocol import Evaluators
     from motiondiff.lit.loading import load_model as load_module
-    from motiondiff.paths import REPO_DIR, find_checkpoint, work_dir
+    from motiondiff.paths import find_checkpoint, work_dir
     from motiondiff.studies.behaviour import sampling_args
+    from motiondiff.studies.config import study_config
 
-    args = dict(a.split("=", 1) for a in argv)
+    cfg = study_config("action_accuracy", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))
-    ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
+    ckpt = find_checkpoint(cfg.checkpoint, outputs)
     module = load_module(ckpt)
     if module.condition_kind != "text":
         raise SystemExit(f"{ckpt} is a {module.condition_kind} model; descriptions are for text models")
     dataset = module.hparams.get("dataset") or "bandai_mini"
     evaluators = Evaluators.load(REPO_DIR / "checkpoints" / "evaluators" / dataset, module.hparams.num_joints)
     evaluators.for_module(module)
-    items = load_descriptions(args.get("captions", "paraphrases"))
-    sampling = sampling_args(args)
+    items = load_descriptions(cfg.captions)
+    sampling = sampling_args(cfg)
     sampling.setdefault("guidance", module.default_guidance)
     sampling.setdefault("smooth_sigma", module.default_smooth_sigma)
-    n, seed = int(args.get("num_samples", 10)), int(args.get("seed", 0))
+    n, seed = cfg.num_samples, cfg.seed
     names = evaluators.action_names
-    lengths = action_lengths(Path(args.get("data", REPO_DIR / "data" / dataset)), names, module.hparams.fps,
+    lengths = action_lengths(Path(cfg.data or REPO_DIR / "data" / dataset), names, module.hparams.fps,
                              module.hparams.max_frames)  # fmt: skip
     start = time.perf_counter()
     result = measure(module, evaluators, items, lengths, n, seed, **sampling)
     accuracy, rows = summarise(result)
-    out = Path(args.get("out", outputs / "action_accuracy" / time.strftime("%Y-%m-%d_%H-%M-%S")))
+    out = Path(cfg.out or outputs / "action_accuracy" / time.strftime("%Y-%m-%d_%H-%M-%S"))
     out.mkdir(parents=True, exist_ok=True)
-    notes = [f"checkpoint: {ckpt}", f"descriptions: {args.get('captions', 'paraphrases')} ({len(items)}), "
+    notes = [f"checkpoint: {ckpt}", f"descriptions: {cfg.captions} ({len(items)}), "
              f"{n} samples each, seed {seed}; sampler {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
              f"guidance {sampling['guidance']:g}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}; "
              f"{time.perf_counter() - start:.0f} s",
@@ -120,4 +122,6 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    from motiondiff.scripting import user_errors
+
+    user_errors(main)(sys.argv[1:])

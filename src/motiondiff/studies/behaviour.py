@@ -2,12 +2,13 @@
 next to real clips of the asked action.
 
     python -m motiondiff.studies.behaviour [checkpoint=latest] [num_samples=10] [seed=0] [sampler=ddim steps=50]
-        [out=<folder>]
+        [guidance=2.5] [smooth_sigma=1.5] [out=<folder>]        (every key and its default: conf/study/behaviour.yaml)
 
 For each prompt: how many samples the dataset's action classifier assigns the asked action (and what the rest
 become), distance travelled, wrists above the head and mean joint speed, with the same facts for the real clips of
 that label; a per-action table (behaviour.md) and a confusion matrix (behaviour_confusion.png) go to `out`. It
-samples with sample.py's default sampler (conf/sample.yaml), so the report shows what users get.
+samples through the user-facing `MotionPipeline` with sample.py's default sampler (conf/sample.yaml), so the report
+shows what users get.
 """
 
 from __future__ import annotations
@@ -21,8 +22,8 @@ import torch
 from omegaconf import OmegaConf
 
 from motiondiff.data.preparing.captions import measure
-from motiondiff.data.representations.hml_features import joints_from_features
 from motiondiff.paths import CONF_DIR
+from motiondiff.pipelines import MotionPipeline
 
 # prompt, seconds, dataset label of the real clips it should resemble
 DEFAULT_PROMPTS = (
@@ -81,7 +82,7 @@ def mean_joint_acceleration(joints: np.ndarray, fps: float) -> float:
 
 
 def generate(
-    module,
+    pipe: MotionPipeline,
     prompt: str | None,
     seconds: float,
     n: int,
@@ -90,18 +91,35 @@ def generate(
     sampler: str = "ddim",
     steps: int | None = None,
     smooth_sigma: float | None = None,
-) -> list[np.ndarray]:
-    """n de-normalised feature sequences (frames, D) for a prompt (None: unconditioned), with the model's default
-    guidance unless given; ``smooth_sigma`` > 0: vvMDM's temporal filter on the joints (``smooth_features``)."""
-    from motiondiff.edit.smoothing import smooth_features
-    from motiondiff.lit.generation import generate_features
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """(joints (frames, J, 3), de-normalised features (frames, D)) of n motions for a prompt (None: unconditioned)
+    through the pipeline, at most the model's length, with the model's default guidance unless given; ``smooth_sigma``
+    > 0: vvMDM's temporal filter on the joints (the features are the model's, as generated)."""
+    seconds = min(seconds, pipe.max_seconds)
+    if prompt is None and pipe.condition_kind != "none":  # the pipeline asks conditioned models with a condition
+        joints, feats = _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma)
+    else:
+        out = pipe(prompt if pipe.condition_kind != "none" else None, seconds=seconds, num_samples=n,
+                   guidance=guidance, sampler=sampler, steps=steps, seed=seed, smooth_sigma=smooth_sigma)  # fmt: skip
+        joints, feats = out.joints, out.features
+    return joints, feats
 
-    frames = min(round(seconds * module.hparams.fps), module.hparams.max_frames)
-    gen = torch.Generator().manual_seed(seed)
-    guidance = module.default_guidance if guidance is None else guidance
-    feats = generate_features(module, [prompt] * n, torch.full((n,), frames), batch_size=max(n, 1), generator=gen,
-                              guidance=guidance, sampler=sampler, steps=steps, progress=True)  # fmt: skip
-    return [smooth_features(f, smooth_sigma) for f in feats]
+
+def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tuple[list, list]:
+    """A conditioned model's samples of its ∅ condition (classifier-free guidance's unconditional half), made and
+    decoded as the pipeline makes its motions."""
+    from motiondiff.edit.smoothing import smooth_joints
+    from motiondiff.lit.generation import fitted_steps
+
+    model = pipe.model
+    frames = torch.full((n,), round(seconds * pipe.fps))
+    steps = fitted_steps(model, steps, 50 if sampler == "ddim" else None)
+    generator = torch.Generator(device=model.device).manual_seed(int(seed))
+    with torch.inference_mode():
+        x = model.sample(None, frames, sampler=sampler, steps=steps, generator=generator)
+    feats = list(model.denormalise(x.float()).cpu().numpy())
+    joints = [smooth_joints(model.representation.decode_numpy(f).astype(np.float32), smooth_sigma) for f in feats]
+    return joints, feats
 
 
 def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test")) -> list[np.ndarray]:
@@ -117,20 +135,25 @@ def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test"
     return clips
 
 
-def sampling_args(args: dict[str, str]) -> dict:
-    """sampler=, steps=, guidance=, smooth_sigma= of a key=value command line over sample.py's default sampler."""
-    sampling = default_sampler() if "sampler" not in args else {"sampler": args["sampler"], "steps": None}
-    if "steps" in args:
-        sampling["steps"] = int(args["steps"])
-    if "guidance" in args:
-        sampling["guidance"] = float(args["guidance"])
-    if "smooth_sigma" in args:
-        sampling["smooth_sigma"] = float(args["smooth_sigma"]) or None
+def sampling_args(cfg) -> dict:
+    """sampler, steps, guidance, smooth_sigma of a study's config over sample.py's default sampler (sampler: null);
+    guidance and smooth_sigma only where given (smooth_sigma 0: off)."""
+    sampling = default_sampler() if cfg.sampler is None else {"sampler": cfg.sampler, "steps": None}
+    if cfg.steps is not None:
+        sampling["steps"] = cfg.steps
+    if cfg.guidance is not None:
+        sampling["guidance"] = cfg.guidance
+    if cfg.smooth_sigma is not None:
+        sampling["smooth_sigma"] = cfg.smooth_sigma or None
     return sampling
 
 
-def classify(evaluators, features: list[np.ndarray]) -> np.ndarray:
-    """The action classifier's label id for each clip of features."""
+def classify(evaluators, features: list[np.ndarray], smooth_sigma: float | None = None, layout: str = "hml263"):
+    """The action classifier's label id for each clip of features, smoothed first as evaluate.py scores samples
+    (``smooth_features``: the classifier reads the motion whose joints the report measures)."""
+    from motiondiff.edit.smoothing import smooth_features
+
+    features = [smooth_features(f, smooth_sigma, layout) for f in features]
     return evaluators.embed_motion(features)["action_logits"].argmax(-1)
 
 
@@ -139,6 +162,8 @@ def report(module, data_root, n: int = 10, seed: int = 0, evaluators=None, promp
     An action-conditioned model is asked with each prompt's label instead of its text (labels it lacks are left
     out), so both kinds of model are measured on the same actions."""
     fps = module.hparams.fps
+    pipe = MotionPipeline(module)
+    layout = getattr(getattr(module, "representation", None), "name", "hml263")
     names = evaluators.action_names if evaluators is not None and evaluators.action else None
     if module.condition_kind == "action":
         known = set(module.hparams.action_names)
@@ -146,18 +171,19 @@ def report(module, data_root, n: int = 10, seed: int = 0, evaluators=None, promp
     rows = {}
     for prompt, seconds, label in prompts:
         frames = round(seconds * fps)
-        feats = generate(module, prompt, seconds, n, seed, **sampling)
+        joints, feats = generate(pipe, prompt, seconds, n, seed, **sampling)
         real = real_clips(data_root, label, frames)
+        predicted = classify(evaluators, feats, sampling.get("smooth_sigma"), layout) if names else None
         rows[prompt] = {
             "label": label,
-            "generated": Behaviour.of([joints_from_features(f) for f in feats], fps),
+            "generated": Behaviour.of(joints, fps),
             "real": Behaviour.of(real, fps) if real else None,
-            "predicted": [names[i] for i in classify(evaluators, feats)] if names else None,
+            "predicted": None if predicted is None else [names[i] for i in predicted],
         }
     if module.condition_kind == "text":
-        uncond = generate(module, None, 4.0, n, seed, **sampling)
-        rows["(unconditioned)"] = {"label": None, "generated": Behaviour.of([joints_from_features(f) for f in uncond],
-                                                                              fps), "real": None, "predicted": None}  # fmt: skip
+        uncond, _ = generate(pipe, None, 4.0, n, seed, **sampling)
+        rows["(unconditioned)"] = {"label": None, "generated": Behaviour.of(uncond, fps), "real": None,
+                                   "predicted": None}  # fmt: skip
     return rows
 
 
@@ -207,28 +233,28 @@ def main(argv: list[str]) -> None:
     from motiondiff.eval.protocol import Evaluators
     from motiondiff.lit.loading import load_model as load_module
     from motiondiff.paths import REPO_DIR, find_checkpoint, work_dir
+    from motiondiff.studies.config import study_config
 
-    args = dict(a.split("=", 1) for a in argv)
+    cfg = study_config("behaviour", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))
-    ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
+    ckpt = find_checkpoint(cfg.checkpoint, outputs)
     module = load_module(ckpt)
     dataset = module.hparams.get("dataset") or "bandai_mini"
-    data_root = args.get("data", str(REPO_DIR / "data" / dataset))
-    evaluator_dir = Path(args.get("evaluators", REPO_DIR / "checkpoints" / "evaluators" / dataset))
+    data_root = cfg.data or str(REPO_DIR / "data" / dataset)
+    evaluator_dir = Path(cfg.evaluators or REPO_DIR / "checkpoints" / "evaluators" / dataset)
     evaluators = Evaluators.load(evaluator_dir, module.hparams.num_joints).for_module(module) if any(
         evaluator_dir.glob("action.safetensors")) else None  # fmt: skip
-    sampling = sampling_args(args)
+    sampling = sampling_args(cfg)
     sampling.setdefault("smooth_sigma", module.default_smooth_sigma)  # what sample.py gives users by default
     guidance = sampling.get("guidance", module.default_guidance)
     header = [f"checkpoint: {ckpt}", f"sampler: {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
               f"guidance {guidance:g}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}, "
-              f"seed {args.get('seed', 0)}",
+              f"seed {cfg.seed}",
               f"classifier: {evaluator_dir if evaluators else 'none (no action.safetensors): no verdicts'}"]  # fmt: skip
     print("\n".join(header))
-    rows = report(module, data_root, int(args.get("num_samples", 10)), int(args.get("seed", 0)), evaluators,
-                  **sampling)  # fmt: skip
+    rows = report(module, data_root, cfg.num_samples, cfg.seed, evaluators, **sampling)
     print_report(rows)
-    out = Path(args.get("out", outputs / "behaviour" / time.strftime("%Y-%m-%d_%H-%M-%S")))
+    out = Path(cfg.out or outputs / "behaviour" / time.strftime("%Y-%m-%d_%H-%M-%S"))
     out.mkdir(parents=True, exist_ok=True)
     (out / "behaviour.md").write_text(markdown_report(rows, header))
     if evaluators is not None:
@@ -242,4 +268,6 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    from motiondiff.scripting import user_errors
+
+    user_errors(main)(sys.argv[1:])

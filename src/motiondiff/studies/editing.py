@@ -1,9 +1,9 @@
 """Does editing keep what it should and change what it should? Measurements on real test clips.
 
     python -m motiondiff.studies.editing [checkpoint=latest] [num_edits=20] [num_part_edits=10] [split=test]
-        [modes=overwrite,repaint] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [boundary_blend=16] [hold_from=1]
-        [reconstruction=0]
-        [seed=0] [data=<prepared folder>] [text="a person raises both hands"] [parts=lower_body] [out=<folder>] [device=cpu]
+        [modes=[overwrite,repaint]] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [boundary_blend=16]
+        [hold_from=1] [reconstruction=0] [seed=0] [data=<prepared folder>] ["text='a person raises both hands'"]
+        [parts=lower_body] [out=<folder>] [device=cpu]          (every key and its default: conf/study/editing.yaml)
 
 (a) In-betweening of ``num_edits`` clips of the split (first and last 25% kept, each clip's own caption or action as
     the condition, boundaries blended over ``boundary_blend`` frames; with a blend, the same edits also without it):
@@ -33,13 +33,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.edit.blend import DEFAULT_FRAMES
 from motiondiff.edit.smoothing import smoothness_of_joints
 
 SPEED_FLOOR = 0.1  # m/s: the least "median generated speed" a boundary jump is divided by
 MAX_RATIO = 3.0  # a boundary step at most 3x the generated middle's typical speed counts as seamless
 WRISTS_UP_SHARE = 0.25  # share of frames with both wrists above the head that counts as "hands raised"
-DEFAULT_TEXT = "a person raises both hands"
 
 
 # ---- measurements -------------------------------------------------------------------------------------------------
@@ -172,11 +170,10 @@ def walking_clips(module, split: str, count: int, data_root=None) -> list:
     return found[:count]
 
 
-def evaluate_editing(module, *, split="test", num_edits=20, num_part_edits=10, modes=("overwrite", "repaint"),
-                     text=DEFAULT_TEXT, parts="lower_body", data_root=None, seed=0, boundary_blend=DEFAULT_FRAMES,
+def evaluate_editing(module, *, split, num_edits, num_part_edits, modes, text, parts, data_root, seed, boundary_blend,
                      **sampling) -> dict:  # fmt: skip
-    """The numbers of the module docstring, per mode. ``sampling``: sampler, steps, eta, guidance, resample,
-    hold_from, reconstruction."""
+    """The numbers of the module docstring, per mode (the settings of conf/study/editing.yaml). ``sampling``:
+    sampler, steps, eta, guidance, resample, hold_from, reconstruction."""
     from motiondiff.data.representations.spec import bridge_from_spec
     from motiondiff.edit.api import edit_parts, inbetween
     from motiondiff.edit.inputs import dataset_motions
@@ -353,47 +350,31 @@ def format_report(report: dict, checkpoint: str = "") -> str:
     return "\n".join(lines)
 
 
-KEYS = ("checkpoint", "num_edits", "num_part_edits", "split", "modes", "sampler", "steps", "eta", "guidance", "seed",
-        "data", "text", "parts", "out", "device", "resample", "boundary_blend", "hold_from",
-        "reconstruction")  # fmt: skip
-
-
 def main(argv: list[str]) -> Path:
     from motiondiff.edit.masks import EditError
     from motiondiff.errors import UsageError
     from motiondiff.lit.loading import load_model as load_module
     from motiondiff.paths import REPO_DIR, find_checkpoint
-    from motiondiff.scripting import key_value_args, quiet_tool_caches
+    from motiondiff.scripting import quiet_tool_caches
+    from motiondiff.studies.config import study_config
 
     quiet_tool_caches()
-    args = key_value_args(argv, KEYS)
+    cfg = study_config("editing", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
-    ckpt = find_checkpoint(args.get("checkpoint", "latest"), outputs)
-    module = load_module(ckpt, args.get("device", "cpu"))
-
-    def number(key: str, default: str, kind=float):
-        try:
-            return kind(args.get(key, default))
-        except ValueError:
-            raise UsageError(f"{key} must be a {kind.__name__} number, got {args[key]!r}") from None
-
-    sampling = {"sampler": args.get("sampler", "ddim"), "eta": number("eta", "0"), "resample": number("resample", "1", int),
-                "hold_from": number("hold_from", "1"), "reconstruction": number("reconstruction", "0")}  # fmt: skip
-    steps = args.get("steps", "50")
-    sampling["steps"] = None if steps in ("null", "None") else number("steps", "50", int)  # null: every sampler step
-    if "guidance" in args:
-        sampling["guidance"] = number("guidance", "0")
+    ckpt = find_checkpoint(cfg.checkpoint, outputs)
+    module = load_module(ckpt, cfg.device)
+    sampling = {k: cfg[k] for k in ("sampler", "eta", "resample", "hold_from", "reconstruction", "steps")}
+    if cfg.guidance is not None:
+        sampling["guidance"] = cfg.guidance
     try:
         report = evaluate_editing(
-            module, split=args.get("split", "test"), num_edits=int(args.get("num_edits", 20)),
-            num_part_edits=int(args.get("num_part_edits", 10)),
-            modes=tuple(args.get("modes", "overwrite,repaint").split(",")),
-            text=args.get("text", DEFAULT_TEXT), parts=args.get("parts", "lower_body"), data_root=args.get("data"),
-            seed=int(args.get("seed", 0)), boundary_blend=int(args.get("boundary_blend", DEFAULT_FRAMES)), **sampling,
+            module, split=cfg.split, num_edits=cfg.num_edits, num_part_edits=cfg.num_part_edits,
+            modes=tuple(cfg.modes), text=cfg.text, parts=cfg.parts, data_root=cfg.data, seed=cfg.seed,
+            boundary_blend=cfg.boundary_blend, **sampling,
         )  # fmt: skip
     except EditError as err:
         raise UsageError(str(err)) from None
-    out = Path(args.get("out") or outputs / "edit_eval" / time.strftime("%Y-%m-%d_%H-%M-%S"))
+    out = Path(cfg.out or outputs / "edit_eval" / time.strftime("%Y-%m-%d_%H-%M-%S"))
     out.mkdir(parents=True, exist_ok=True)
     report["checkpoint"] = str(ckpt)
     text = format_report(report, str(ckpt))

@@ -2,8 +2,9 @@
 (issue 7). Captions are **generated** (joined real clips, `data/bandai_mini_compositional`).
 
     python -m motiondiff.studies.guided_compare latent=<train_latent.py ckpt> mdm=<train.py ckpt>
-        [local_model=<ckpt>] [replications=5] [level_steps=15,15,20] [mdm_steps=50] [local_frames=60]
+        [local_model=<ckpt>] [replications=5] [level_steps=[15,15,20]] [mdm_steps=50] [local_frames=60]
         [timing_repeats=5] [timing_only=false] [seed=0] [out=<prefix>] [data=<prepared dir>] [evaluators=<dir>]
+        (every key and its default: conf/study/guided_compare.yaml)
 
 Every row samples the same test captions at the real clips' lengths, and goes through the same evaluators
 (`checkpoints/evaluators/bandai_mini_compositional`): R-precision, FID, MM-Dist and Diversity, mean ± 95% CI over
@@ -29,10 +30,7 @@ from motiondiff.errors import UsageError
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
 from motiondiff.lit.conditions import text_encoder_kwargs
 from motiondiff.paths import REPO_DIR
-from motiondiff.scripting import key_value_args
 
-KEYS = ("latent", "mdm", "local_model", "replications", "level_steps", "mdm_steps", "local_frames",
-        "timing_repeats", "timing_only", "seed", "out", "data", "evaluators")  # fmt: skip
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "comparison"
 # Tab. 4's rows: (level the hierarchy stops at and decodes, local-action energy guidance on)
 ABLATION = {
@@ -211,41 +209,39 @@ def main(argv: list[str] | None = None) -> int:
     from motiondiff.lit.latent import HierarchicalLatentModule
     from motiondiff.lit.loading import load_model as load_module
     from motiondiff.paths import find_checkpoint
+    from motiondiff.studies.config import study_config
     from motiondiff.text.encoders import build_text_encoder
     from motiondiff.text.graph_features import graph_table
 
     argv = list(sys.argv[1:] if argv is None else argv)
-    args = key_value_args(argv, KEYS)
-    if "latent" not in args or "mdm" not in args:
-        raise UsageError("usage: python -m motiondiff.studies.guided_compare latent=<train_latent.py ckpt> "
-                         "mdm=<train.py ckpt> [key=value ...]")  # fmt: skip
-    latent_path = Path(args["latent"])
-    mdm_path = find_checkpoint(args["mdm"], REPO_DIR / "outputs")
+    cfg = study_config("guided_compare", argv)
+    if len(cfg.level_steps) != 3:
+        raise UsageError(f"level_steps must be three numbers [motion, action, specific], got {list(cfg.level_steps)}")
+    latent_path = Path(cfg.latent)
+    mdm_path = find_checkpoint(cfg.mdm, REPO_DIR / "outputs")
     latent = HierarchicalLatentModule.load_from_checkpoint(latent_path, map_location="cpu", weights_only=True).eval()
     mdm = load_module(mdm_path)
-    local_path = find_checkpoint(args.get("local_model", str(mdm_path)), REPO_DIR / "outputs")
+    local_path = find_checkpoint(cfg.local_model or str(mdm_path), REPO_DIR / "outputs")
     local_mdm = mdm if local_path == mdm_path else load_module(local_path)
     check_same_features(local_mdm, latent)
     check_same_features(mdm, latent)
     settings = {
-        "replications": int(args.get("replications", 5)),
-        "level_steps": dict(
-            zip(("motion", "action", "specific"), map(int, args.get("level_steps", "15,15,20").split(",")), strict=True)
-        ),
-        "mdm_steps": int(args.get("mdm_steps", 50)),
-        "local_frames": int(args.get("local_frames", 60)),
-        "timing_repeats": int(args.get("timing_repeats", 5)),
-        "seed": int(args.get("seed", 0)),
+        "replications": cfg.replications,
+        "level_steps": dict(zip(("motion", "action", "specific"), cfg.level_steps, strict=True)),
+        "mdm_steps": cfg.mdm_steps,
+        "local_frames": cfg.local_frames,
+        "timing_repeats": cfg.timing_repeats,
+        "seed": cfg.seed,
     }
-    data = Path(args.get("data", REPO_DIR / "data" / "bandai_mini_compositional"))
+    data = Path(cfg.data or REPO_DIR / "data" / "bandai_mini_compositional")
     dm = PreparedDataModule(data, max_frames=196)
     dm.setup("test")
     clips = EvalClips.from_dataset(dm.dataset("test"))
-    evaluator_dir = Path(args.get("evaluators", REPO_DIR / "checkpoints" / "evaluators" / data.name))
+    evaluator_dir = Path(cfg.evaluators or REPO_DIR / "checkpoints" / "evaluators" / data.name)
     evaluators = Evaluators.load(evaluator_dir).for_module(mdm)
     encoder = build_text_encoder(**text_encoder_kwargs(latent.hparams.text_encoder))
     table = graph_table([c for caps in clips.captions for c in caps], encoder)
-    timing_only = args.get("timing_only", "false").lower() in ("1", "true", "yes")
+    timing_only = cfg.timing_only
     rows: dict[str, list[dict]] = {}
     for r in range(0 if timing_only else settings["replications"]):
         start = time.perf_counter()
@@ -266,7 +262,7 @@ def main(argv: list[str] | None = None) -> int:
             "clips": len(clips), "mdm_row": MDM_ROW.format(steps=settings["mdm_steps"]), "training": training,
             "level_steps_text": "/".join(str(v) for v in settings["level_steps"].values()),
             "command": "python -m motiondiff.studies.guided_compare " + " ".join(argv)}  # fmt: skip
-    out = Path(args.get("out", DEFAULT_OUT))
+    out = Path(cfg.out or DEFAULT_OUT)
     if timing_only:
         write_timing(out, times, meta)
         print(json.dumps(times, indent=1))
@@ -277,4 +273,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from motiondiff.scripting import user_errors
+
+    sys.exit(user_errors(main)())

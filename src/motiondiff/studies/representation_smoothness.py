@@ -2,6 +2,7 @@
 temporal features (smoothness, vvMDM eq. 16: 1 = no acceleration).
 
     python -m motiondiff.studies.representation_smoothness [root=<prepared dataset>] [split=train] [out=<folder>]
+        (every key and its default: conf/study/representation_smoothness.yaml)
 
 The default root is the embedded real dataset (data/bandai_mini). Each representation's de-normalised features of
 every clip of the split are scored and averaged over clips; the table (and a bar chart) go to `out`
@@ -67,12 +68,11 @@ def plot(results: dict[str, dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    args = dict(a.split("=", 1) for a in (sys.argv[1:] if argv is None else argv))
-    unknown = set(args) - {"root", "split", "out"}
-    if unknown:
-        raise SystemExit(f"error: unknown setting(s) {sorted(unknown)}; use root=, split=, out=")
-    root = Path(args.get("root", embedded_data_root()))
-    split, out = args.get("split", "train"), Path(args.get("out", OUT))
+    from motiondiff.studies.config import study_config
+
+    cfg = study_config("representation_smoothness", sys.argv[1:] if argv is None else argv)
+    root = Path(cfg.root or embedded_data_root())
+    split, out = cfg.split, Path(cfg.out or OUT)
     results = representation_smoothness(root, split)
     out.mkdir(parents=True, exist_ok=True)
     text = table(results, root.name, split)
@@ -82,4 +82,6 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from motiondiff.scripting import user_errors
+
+    user_errors(main)()

@@ -5,8 +5,9 @@ sampler whose FID is within ``tolerance`` of DDIM-50's and whose action accuracy
 
     python evaluate.py -m checkpoint=shipped sampler=ddim steps=10,20,50 replications=10 mm_replications=0
     python evaluate.py checkpoint=shipped sampler=ddpm replications=3 mm_replications=0
-    python -m motiondiff.studies.sampler_curve runs=<evaluate run dir>,... [bench=bench/results/latest.json]
-        [tolerance=0.1] [out=docs/results/sampler_curve]
+    python -m motiondiff.studies.sampler_curve runs=[<evaluate run dir>,...] [bench=bench/results/latest.json]
+        [tolerance=0.1] [accuracy_margin=0.02] [out=docs/results/sampler_curve]
+        (every key and its default: conf/study/sampler_curve.yaml)
 
 Seconds per motion come from the bench's `sample_1_<sampler><steps>_guided_s` (one process, idle machine), not
 from the evaluations, which may have run side by side.
@@ -20,9 +21,7 @@ from pathlib import Path
 
 from motiondiff.errors import UsageError
 from motiondiff.paths import REPO_DIR
-from motiondiff.scripting import key_value_args
 
-KEYS = ("runs", "bench", "tolerance", "accuracy_margin", "out")
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "sampler_curve"
 METRICS = ("fid", "r_precision_top3", "mm_dist", "diversity")
 
@@ -104,22 +103,22 @@ def write(out: Path, rows: list[dict], chosen: dict, tolerance: float, times: di
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = key_value_args(argv if argv is not None else sys.argv[1:], KEYS)
-    if "runs" not in args:
-        raise UsageError("usage: python -m motiondiff.studies.sampler_curve runs=<dir>,<dir>,... [key=value ...]")
-    rows = sorted((load_run(Path(p)) for p in args["runs"].split(",")), key=lambda r: (r["sampler"], r["steps"]))
-    tolerance = float(args.get("tolerance", 0.1))
-    bench = Path(args.get("bench", REPO_DIR / "bench" / "results" / "latest.json"))
+    from motiondiff.studies.config import study_config
+
+    cfg = study_config("sampler_curve", argv if argv is not None else sys.argv[1:])
+    rows = sorted((load_run(Path(p)) for p in cfg.runs), key=lambda r: (r["sampler"], r["steps"]))
+    bench = Path(cfg.bench or REPO_DIR / "bench" / "results" / "latest.json")
     times = (
         {k: v for k, v in json.loads(bench.read_text()).items() if k.startswith("sample_1_")} if bench.is_file() else {}
     )
-    margin = float(args.get("accuracy_margin", 0.02))
-    chosen = choose(rows, tolerance, margin)
-    out = Path(args.get("out", DEFAULT_OUT))
-    write(out, rows, chosen, tolerance, times, margin)
+    chosen = choose(rows, cfg.tolerance, cfg.accuracy_margin)
+    out = Path(cfg.out or DEFAULT_OUT)
+    write(out, rows, chosen, cfg.tolerance, times, cfg.accuracy_margin)
     print(out.with_suffix(".md").read_text())
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from motiondiff.scripting import user_errors
+
+    sys.exit(user_errors(main)())

@@ -3,6 +3,7 @@
     python -m motiondiff.studies.vae_levels [motion=<ckpt>] [action=<ckpt>] [specific=<ckpt>] [out=<prefix>]
                                          [split=test] [replications=20] [seed=0] [data=<dataset root>]
                                          [evaluator_dir=checkpoints/evaluators/<dataset>]
+    (every key and its default: conf/study/vae_levels.yaml)
 
 Each test clip is encoded, its posterior mean decoded, and the reconstruction compared with the clip: MPJPE in
 metres (global joints as decoded, and root-aligned as MLD reports), then the evaluate.py protocol with the
@@ -27,9 +28,7 @@ from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_met
 from motiondiff.lit.vae import MotionVAEModule, mpjpe
 from motiondiff.models.vae import LEVEL_TOKENS
 from motiondiff.paths import REPO_DIR
-from motiondiff.scripting import key_value_args
 
-KEYS = ("motion", "action", "specific", "out", "split", "replications", "seed", "data", "evaluator_dir")
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "vae_levels"
 # column key, header (metric keys come from lit.vae.mpjpe and protocol.replication_metrics)
 COLUMNS = (("mpjpe", "MPJPE (m) ↓"), ("mpjpe_root", "root-aligned MPJPE (m) ↓"), ("fid", "FID ↓"),
@@ -205,24 +204,25 @@ def format_table(rows: dict, infos: dict, pairs: list[dict], notes: list[str]) -
 
 def main(argv: list[str]) -> Path:
     from motiondiff.scripting import quiet_tool_caches
+    from motiondiff.studies.config import study_config
 
     quiet_tool_caches()
-    args = key_value_args(argv, KEYS)
+    cfg = study_config("vae_levels", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
-    paths = {lv: Path(args[lv]) if lv in args else newest_checkpoint(lv, outputs) for lv in LEVEL_TOKENS}
+    paths = {lv: Path(cfg[lv]) if cfg[lv] is not None else newest_checkpoint(lv, outputs) for lv in LEVEL_TOKENS}
     loaded = {lv: load_vae(p) for lv, p in paths.items()}
     modules, infos = {lv: m for lv, (m, _) in loaded.items()}, {lv: i for lv, (_, i) in loaded.items()}
     first = modules["motion"].hparams
     for lv, m in modules.items():
         if (m.hparams.dataset, m.hparams.feature_dim) != (first.dataset, first.feature_dim):
             raise UsageError(f"the {lv} VAE was trained on {m.hparams.dataset!r}, the motion VAE on {first.dataset!r}")
-    dm = datamodule(modules["motion"], args.get("data"))
-    folder = _relative(args.get("evaluator_dir", REPO_DIR / "checkpoints" / "evaluators" / first.dataset))
+    dm = datamodule(modules["motion"], cfg.data)
+    folder = _relative(cfg.evaluator_dir or REPO_DIR / "checkpoints" / "evaluators" / first.dataset)
     try:
         evaluators = Evaluators.load(REPO_DIR / folder, num_joints=first.num_joints).for_module(modules["motion"])
     except FileNotFoundError as err:
         raise UsageError(str(err)) from None
-    split, reps, seed = args.get("split", "test"), int(args.get("replications", 20)), int(args.get("seed", 0))
+    split, reps, seed = cfg.split, cfg.replications, cfg.seed
     if reps < 1:
         raise UsageError(f"replications must be >= 1, got {reps}")
     rows, per_clip = evaluate_levels(modules, dm, evaluators, split, reps, seed)
@@ -242,7 +242,7 @@ def main(argv: list[str]) -> Path:
         + [f"{lv}: `python train_vae.py {' '.join(i['overrides'])}`" for lv, i in infos.items() if i.get("overrides")]
     )
     text = format_table(rows, infos, pairs, notes)
-    out = Path(args.get("out", DEFAULT_OUT))
+    out = Path(cfg.out or DEFAULT_OUT)
     out.parent.mkdir(parents=True, exist_ok=True)
     report.write_markdown(out.with_suffix(".md"), text)
     data = {"rows": {k: {m: list(v) for m, v in s.items()} for k, s in rows.items()}, "levels": infos,

@@ -1,8 +1,8 @@
 """Does a local action's weight control GuidedMotion? (issue 7: "weight control works")
 
     python -m motiondiff.studies.weight_control checkpoint=<train_latent.py ckpt> [local_model=shipped] [captions=20]
-        [weights=0,0.5,1,1.5,2] [samples=2] [level_steps=15,15,20] [rho=0.01] [final_level=specific] [seed=0]
-        [out=<prefix>]
+        [weights=[0,0.5,1,1.5,2]] [samples=2] [level_steps=[15,15,20]] [rho=0.01] [final_level=specific] [seed=0]
+        [out=<prefix>]                          (every key and its default: conf/study/weight_control.yaml)
 
 For each of ``captions`` captions of the complex-motion test split (generated captions of joined real clips), the
 local actions are generated once by ``local_model``; the guided action is the first one whose description walks
@@ -21,15 +21,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.diffusion.energy_guidance import DEFAULT_RHO
 from motiondiff.errors import UsageError
 from motiondiff.eval.report import mean_ci
 from motiondiff.lit.conditions import text_encoder_kwargs
 from motiondiff.paths import REPO_DIR, find_checkpoint
-from motiondiff.scripting import key_value_args
 
-KEYS = ("checkpoint", "local_model", "captions", "weights", "samples", "level_steps", "rho", "final_level", "seed", "out",
-        "data")  # fmt: skip
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "weight_control"
 MOVING = ("walk", "run", "dash", "jog", "step")
 FRAMES = 160  # 8 s at 20 fps: long enough for three local actions, within the complex split's 150-196 frames
@@ -157,42 +153,38 @@ def main(argv: list[str] | None = None) -> int:
     from motiondiff.eval.protocol import Evaluators
     from motiondiff.lit.latent import HierarchicalLatentModule
     from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.studies.config import study_config
     from motiondiff.text.encoders import build_text_encoder
 
-    args = key_value_args(argv if argv is not None else sys.argv[1:], KEYS)
-    if "checkpoint" not in args:
+    cfg = study_config("weight_control", argv if argv is not None else sys.argv[1:])
+    if cfg.final_level not in ("action", "specific"):
         raise UsageError(
-            "usage: python -m motiondiff.studies.weight_control checkpoint=<train_latent.py ckpt> [key=value ...]"
+            f"final_level must be action or specific (the guided action latent must exist), got {cfg.final_level!r}"
         )
-    ckpt = Path(args["checkpoint"])
+    if len(cfg.level_steps) != 3:
+        raise UsageError(f"level_steps must be three numbers [motion, action, specific], got {list(cfg.level_steps)}")
+    ckpt = Path(cfg.checkpoint)
     module = HierarchicalLatentModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
-    mdm = load_module(find_checkpoint(args.get("local_model", "shipped"), REPO_DIR / "outputs"))
+    mdm = load_module(find_checkpoint(cfg.local_model, REPO_DIR / "outputs"))
     encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
-    data = Path(args.get("data", REPO_DIR / "data" / "bandai_mini_compositional"))
+    data = Path(cfg.data or REPO_DIR / "data" / "bandai_mini_compositional")
     evaluators = Evaluators.load(REPO_DIR / "checkpoints" / "evaluators" / data.name).for_module(mdm)
-    weights = [float(w) for w in args.get("weights", "0,0.5,1,1.5,2").split(",")]
-    steps = dict(
-        zip(("motion", "action", "specific"), map(int, args.get("level_steps", "15,15,20").split(",")), strict=True)
-    )
-    seed, samples = int(args.get("seed", 0)), int(args.get("samples", 2))
-    final_level = args.get("final_level", "specific")
-    if final_level not in ("action", "specific"):
-        raise UsageError(
-            f"final_level must be action or specific (the guided action latent must exist), got {final_level!r}"
-        )
-    sample_kwargs = {"rho": float(args.get("rho", DEFAULT_RHO)), "final_level": final_level}
+    weights = list(cfg.weights)
+    steps = dict(zip(("motion", "action", "specific"), cfg.level_steps, strict=True))
+    seed, samples, final_level = cfg.seed, cfg.samples, cfg.final_level
+    sample_kwargs = {"rho": cfg.rho, "final_level": final_level}
     dm = PreparedDataModule(data, max_frames=196)
     dm.setup("test")
-    records = dm.dataset("test").records[: int(args.get("captions", 20))]
+    records = dm.dataset("test").records[: cfg.captions]
     results = []
     for i, rec in enumerate(records):
         results.append(run_caption(module, mdm, encoder, evaluators, rec.texts[0], FRAMES, weights, samples, steps, seed + i,
                                    **sample_kwargs))  # fmt: skip
         print(f"[{i + 1}/{len(records)}] {rec.texts[0][:70]!r}: guided {results[-1]['guided_text']!r}", flush=True)
-    meta = {"checkpoint": str(ckpt), "local_model": args.get("local_model", "shipped"), "weights": weights,
+    meta = {"checkpoint": str(ckpt), "local_model": cfg.local_model, "weights": weights,
             "samples": samples, "level_steps": steps, "seed": seed, **sample_kwargs}  # fmt: skip
     summary = summarise(results, weights)
-    out = Path(args.get("out", DEFAULT_OUT))
+    out = Path(cfg.out or DEFAULT_OUT)
     write(out, meta, results, summary)
     print(json.dumps(summary["curve"], indent=1))
     print(f"written {out}.md/.json/.png")
@@ -200,4 +192,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from motiondiff.scripting import user_errors
+
+    sys.exit(user_errors(main)())

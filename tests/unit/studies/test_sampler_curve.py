@@ -55,7 +55,7 @@ def test_a_sampler_that_loses_action_accuracy_is_not_chosen(tmp_path):
 
 def test_report_is_written_with_the_chosen_row(tmp_path):
     runs = [_run(tmp_path / n, "ddim", k, f) for n, k, f in (("a", 10, 13.0), ("b", 20, 10.5), ("c", 50, 10.0))]
-    main([f"runs={','.join(map(str, runs))}", f"bench={tmp_path / 'none.json'}", f"out={tmp_path / 'curve'}"])
+    main([f"runs=[{','.join(map(str, runs))}]", f"bench={tmp_path / 'none.json'}", f"out={tmp_path / 'curve'}"])
     assert "DDIM-20 **(chosen)**" in (tmp_path / "curve.md").read_text()
     assert json.loads((tmp_path / "curve.json").read_text())["chosen"] == "DDIM-20"
     assert (tmp_path / "curve.png").stat().st_size > 0
