@@ -11,12 +11,13 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps
-from motiondiff.cli.sample import check_text, export_formats, slug
+from motiondiff.cli.sample import export_formats, slug
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import export_features
+from motiondiff.lit.conditions import check_action, check_text
 from motiondiff.lit.loading import load_model as load_module
 from motiondiff.studies.editing import edit_numbers
 
@@ -33,9 +34,7 @@ def edit_condition(cfg: DictConfig, module):
     if cfg.action is not None:
         if kind != "action":
             raise UsageError(f"this model is conditioned on {kind}: use text= (or nothing), not action=")
-        if cfg.action not in module.hparams.action_names:
-            raise UsageError(f"unknown action {cfg.action!r}; known actions: {', '.join(module.hparams.action_names)}")
-        return cfg.action
+        return check_action(cfg.action, list(module.hparams.action_names))
     if cfg.text is not None:
         if kind != "text":
             raise UsageError(f"this model is conditioned on {kind}: use action= (or nothing), not text=")

@@ -32,7 +32,7 @@ from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.export.outputs import export_features, parse_formats
-from motiondiff.lit.conditions import check_text, repeated  # noqa: F401  (check_text: used by edit/sample_guided)
+from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.lit.generation import generate_features
 from motiondiff.lit.loading import load_model
@@ -58,10 +58,7 @@ def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str 
                 f"this model is conditioned on actions: pass action=<one of {module.hparams.action_names}>"
             )
         names = [cfg.action] if isinstance(cfg.action, str) else list(cfg.action)
-        for name in names:
-            if name not in module.hparams.action_names:
-                raise UsageError(f"unknown action {name!r}; known actions: {', '.join(module.hparams.action_names)}")
-        return names
+        return [check_action(name, list(module.hparams.action_names)) for name in names]
     if cfg.prompts_file is not None:
         path = Path(cfg.prompts_file)
         if not path.is_file():
@@ -126,16 +123,8 @@ def split_timed(cfg: DictConfig) -> tuple[DictConfig, list[float] | None]:
 
 
 def num_frames(cfg: DictConfig, module: MotionDiffusionModule) -> int:
-    fps, max_frames = module.hparams.fps, module.hparams.max_frames
-    frames = cfg.frames if cfg.frames is not None else round(float(cfg.length) * fps)
-    if not isinstance(frames, int) or frames <= 0:
-        raise UsageError(f"length must be positive, got {cfg.length if cfg.frames is None else cfg.frames}")
-    if frames > max_frames:
-        raise UsageError(
-            f"{frames} frames ({frames / fps:g} s) is longer than this model's maximum of {max_frames} frames "
-            f"({max_frames / fps:g} s); ask for a shorter length"
-        )
-    return frames
+    """frames= as given, else length= in seconds."""
+    return generation_frames(module, cfg.length, frames=cfg.frames)
 
 
 def slug(text: str | None) -> str:

@@ -43,7 +43,8 @@ def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, 
 
 
 def run(cfg: DictConfig) -> Path:
-    from motiondiff.cli.sample import check_text, export_formats, save_samples, smoothing_sigma
+    from motiondiff.cli.sample import export_formats, save_samples, smoothing_sigma
+    from motiondiff.lit.conditions import check_text
     from motiondiff.lit.loading import load_model
     from motiondiff.pipelines import GuidedMotionPipeline
 

@@ -25,6 +25,7 @@ from motiondiff.edit.inpaint import SamplingOptions, inpaint
 from motiondiff.edit.inputs import InputMotion
 from motiondiff.edit.masks import EditError, frame_keep, part_keep, resolve_joints, to_frames
 from motiondiff.edit.trajectory import close_root_path, needs_root_closure
+from motiondiff.lit.conditions import check_action
 from motiondiff.skeleton import Skeleton
 
 
@@ -80,9 +81,8 @@ def _conditions(module, condition, count: int) -> list:
             raise EditError("this model is unconditioned: drop the text/action (condition=None)")
         if kind == "text" and (not isinstance(c, str) or not c.strip()):
             raise EditError(f"this model is text-conditioned: give a non-empty text, got {c!r}")
-        names = module.hparams.get("action_names") or []
-        if kind == "action" and not (c in names or (isinstance(c, int) and 0 <= c < len(names))):
-            raise EditError(f"unknown action {c!r}; known actions: {', '.join(names)}")
+        if kind == "action":
+            check_action(c, list(module.hparams.get("action_names") or []), EditError)
     if any(c is None for c in conds) and not all(c is None for c in conds):
         raise EditError("give a condition for every motion or for none (a batch is conditioned or not)")
     return conds

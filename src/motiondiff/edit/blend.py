@@ -2,7 +2,7 @@
 to the model's own motion over a few frames.
 
 Why: a denoiser trained on few clips gives back its own nearby pose rather than an unseen input pose (its x̂0 error on
-an almost clean clip is several cm, ``eval.editing.low_noise_error``), so plain in-painting puts that pose right next
+an almost clean clip is several cm, ``studies.editing.low_noise_error``), so plain in-painting puts that pose right next
 to the exact kept frames and the boundary jumps. Games remove such jumps with offset blending ("inertialization",
 Bollo 2018); PriorMDM's DoubleTake (Shafir et al. 2023) blends its transitions for the same reason. For every
 generated run of frames [a, b) of a feature sequence x that touches kept frames:

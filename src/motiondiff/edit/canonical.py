@@ -15,7 +15,7 @@ offset = (x, 0, z) (heights are never touched: every training clip already stand
   the root position is turned and shifted, the root rotation left-multiplied by R_y(yaw), re-encoded per codec.
 
 ``placement(rep, features, frame)`` reads a frame's placement the way the training clips were canonicalised (facing
-from the skeleton's hips and shoulders, ``data.features.ground_and_face``; for hml the decoder's own root
+from the skeleton's hips and shoulders, ``data.representations.hml_features.ground_and_face``; for hml the decoder's own root
 heading), so ``to_canonical`` puts that frame where every training clip starts.
 """
 

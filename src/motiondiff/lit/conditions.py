@@ -24,6 +24,35 @@ def check_text(text) -> str:
     return text
 
 
+def check_action(action, names: list[str], error: type[Exception] = UsageError):
+    """An action the model knows, as its name or index (ids stay ints), or one clear error listing the names."""
+    if isinstance(action, int | np.integer) and not isinstance(action, bool) and 0 <= int(action) < len(names):
+        return int(action)
+    if isinstance(action, str) and action in names:
+        return action
+    raise error(f"unknown action {action!r}; known actions: {', '.join(names)}")
+
+
+def generation_frames(module, seconds=None, *, frames: int | None = None, name: str = "length") -> int:
+    """Frames to generate for ``seconds`` (or ``frames`` as given), at least one and at most the model's maximum;
+    ``name`` is what the user called the length, for the one error line."""
+    fps, max_frames = float(module.hparams.fps), int(module.hparams.max_frames)
+    if frames is None:
+        if isinstance(seconds, bool) or not isinstance(seconds, int | float) or not np.isfinite(seconds):
+            raise UsageError(f"{name} must be a number of seconds, got {seconds!r}")
+        frames, given = round(float(seconds) * fps), seconds
+    else:
+        given = frames
+    if isinstance(frames, bool) or not isinstance(frames, int | np.integer) or frames <= 0:
+        raise UsageError(f"{name} must be positive (at least one frame, {1 / fps:g} s), got {given!r}")
+    if frames > max_frames:
+        raise UsageError(
+            f"{frames} frames ({frames / fps:g} s) is longer than this model's maximum of {max_frames} frames "
+            f"({max_frames / fps:g} s); ask for a shorter {name}"
+        )
+    return int(frames)
+
+
 def text_encoder_kwargs(cfg_text) -> dict:
     """Arguments of `build_text_encoder` from a text_encoder config (its `dim` is informational)."""
     return {k: v for k, v in _plain(cfg_text).items() if k != "dim"}
@@ -37,7 +66,12 @@ def _plain(cfg) -> dict:
 
 def condition_batch(module, conditions: list):
     """The model's condition for a batch: prompts (text models, features cached per prompt), action names or ids
-    (action models), or None (unconditioned models ignore what they are given)."""
+    (action models), or None (unconditioned models ignore what they are given). A batch of only None asks a
+    conditioned model for its ∅ condition (classifier-free guidance's unconditional half)."""
+    if any(c is None for c in conditions):
+        if not all(c is None for c in conditions):
+            raise ValueError("a batch is conditioned or not: give a condition for every motion or for none")
+        return None
     if module.condition_kind == "text":
         from motiondiff.text.encoders import build_text_encoder
 

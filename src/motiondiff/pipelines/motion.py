@@ -25,7 +25,7 @@ from motiondiff.edit.long_motion import generate_long
 from motiondiff.edit.masks import EditError
 from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.errors import UsageError
-from motiondiff.lit.conditions import check_text, repeated
+from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.generation import fitted_steps, generate_features
 from motiondiff.lit.loading import load_model
 from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
@@ -213,12 +213,7 @@ class MotionPipeline:
         return [check_text(p) for p in items]
 
     def _check_action(self, action):
-        names = self.actions
-        if isinstance(action, int | np.integer) and 0 <= int(action) < len(names):
-            return int(action)
-        if isinstance(action, str) and action in names:
-            return action
-        raise UsageError(f"unknown action {action!r}; this model knows: {', '.join(names)}")
+        return check_action(action, self.actions)
 
     def _label(self, condition) -> str | None:
         if isinstance(condition, int | np.integer) and self.actions:
@@ -226,13 +221,7 @@ class MotionPipeline:
         return condition
 
     def _frames(self, seconds) -> int:
-        if isinstance(seconds, bool) or not isinstance(seconds, int | float) or not np.isfinite(seconds):
-            raise UsageError(f"seconds must be a number, got {seconds!r}")
-        frames = round(float(seconds) * self.fps)
-        if not 1 <= frames <= int(self.model.hparams.max_frames):
-            raise UsageError(f"seconds must be between {1 / self.fps:g} and this model's {self.max_seconds:g}, "
-                             f"got {seconds:g}")  # fmt: skip
-        return frames
+        return generation_frames(self.model, seconds, name="seconds")
 
     @staticmethod
     def _per_prompt(value, n: int, name: str) -> list:

@@ -109,15 +109,13 @@ def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tupl
     """A conditioned model's samples of its ∅ condition (classifier-free guidance's unconditional half), made and
     decoded as the pipeline makes its motions."""
     from motiondiff.edit.smoothing import smooth_joints
-    from motiondiff.lit.generation import fitted_steps
+    from motiondiff.lit.generation import fitted_steps, generate_features
 
     model = pipe.model
     frames = torch.full((n,), round(seconds * pipe.fps))
     steps = fitted_steps(model, steps, 50 if sampler == "ddim" else None)
     generator = torch.Generator(device=model.device).manual_seed(int(seed))
-    with torch.inference_mode():
-        x = model.sample(None, frames, sampler=sampler, steps=steps, generator=generator)
-    feats = list(model.denormalise(x.float()).cpu().numpy())
+    feats = generate_features(model, [None] * n, frames, generator=generator, sampler=sampler, steps=steps)
     joints = [smooth_joints(model.representation.decode_numpy(f).astype(np.float32), smooth_sigma) for f in feats]
     return joints, feats
 

@@ -4,28 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from fixtures.synthetic_motion import glide as _walk
+from fixtures.synthetic_motion import rest_pose as _rest_pose
 
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.preparing.captions import CONTENT_PHRASES, STYLE_PHRASES, generate_captions, measure
 from motiondiff.data.preparing.splits import stratified_split, stratified_subset
-from motiondiff.skeleton import SMPL22, SMPL22_BONE_LENGTHS
-
-
-def _rest_pose() -> np.ndarray:
-    """SMPL-22 standing pose from the skeleton's rest offsets, feet on the floor, facing +Z."""
-    pose = np.zeros((22, 3))
-    for j, p in enumerate(SMPL22.parents):
-        if p >= 0:
-            pose[j] = pose[p] + SMPL22.raw_offsets[j] * SMPL22_BONE_LENGTHS[j]
-    pose[:, 1] -= pose[:, 1].min()
-    return pose
-
-
-def _walk(direction_deg: float, metres: float, frames: int = 80) -> np.ndarray:
-    """The rest pose gliding `metres` along a direction (0 = forward, 90 = left) without turning."""
-    a = np.radians(direction_deg)
-    step = np.array([np.sin(a), 0.0, np.cos(a)]) * metres
-    return _rest_pose()[None] + np.linspace(0, 1, frames)[:, None, None] * step
+from motiondiff.skeleton import SMPL22
 
 
 @pytest.mark.parametrize(

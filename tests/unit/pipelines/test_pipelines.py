@@ -74,7 +74,7 @@ def test_action_model_takes_action_names():
     ("kwargs", "message"),
     [
         ({"prompt": ""}, "text is empty"),
-        ({"prompt": "walk", "seconds": 60}, "seconds must be between"),
+        ({"prompt": "walk", "seconds": 60}, "longer than this model's maximum"),
         ({"prompt": "walk", "seconds": float("nan")}, "seconds must be a number"),
         ({"prompt": "walk", "num_samples": 0}, "num_samples"),
         ({"prompt": "walk", "guidance": -1}, "guidance"),

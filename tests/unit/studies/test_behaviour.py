@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from test_captions_and_splits import _rest_pose, _walk
+from fixtures.synthetic_motion import glide as _walk
+from fixtures.synthetic_motion import rest_pose as _rest_pose
 
 from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.studies.behaviour import Behaviour, mean_joint_acceleration, mean_joint_speed, real_clips

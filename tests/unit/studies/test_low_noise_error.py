@@ -1,4 +1,4 @@
-"""eval.editing.low_noise_error: the denoiser's error on an almost clean input, next to the input's own error."""
+"""studies.editing.low_noise_error: the denoiser's error on an almost clean input, next to the input's own error."""
 
 from __future__ import annotations
 

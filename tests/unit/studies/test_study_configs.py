@@ -14,7 +14,7 @@ from motiondiff.errors import UsageError
 from motiondiff.paths import CONF_DIR
 from motiondiff.studies.config import study_config
 
-STUDIES_DIR = Path(__file__).resolve().parents[2] / "src" / "motiondiff" / "studies"
+STUDIES_DIR = Path(__file__).resolve().parents[3] / "src" / "motiondiff" / "studies"
 
 
 def _has_main(path: Path) -> bool:
