@@ -2,7 +2,7 @@
 
     python -m motiondiff.cli.preset_audit [out=docs/presets_audit.md]
 
-The paper values are written here by hand from the papers (../shared/papers; summaries in METHODS.md) and MDM's
+The paper values are written here by hand from the papers (MDM, vvMDM, GuidedMotion) and MDM's
 released training commands; `tests/unit/cli/test_preset_audit.py` fails when a preset drifts from them. A preset that
 deliberately differs is not a paper preset: give it another name (cpu_twin_*, trainer=gpu, ...).
 """

@@ -1,5 +1,5 @@
-"""GuidedMotion against plain MDM on the complex-motion test split, its Tab. 4-style ablation and sampling times
-(issue 7). Captions are **generated** (joined real clips, `data/bandai_mini_compositional`).
+"""GuidedMotion against plain MDM on the complex-motion test split, its Tab. 4-style ablation and sampling times.
+Captions are **generated** (joined real clips, `data/bandai_mini_compositional`).
 
     python -m motiondiff.studies.guided_compare latent=<train_latent.py ckpt> mdm=<train.py ckpt>
         [local_model=<ckpt>] [replications=5] [level_steps=[15,15,20]] [mdm_steps=50] [local_frames=60]

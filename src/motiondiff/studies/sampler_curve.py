@@ -1,4 +1,4 @@
-"""Fewer sampling steps at matched quality (issue 8): FID, R-precision, MM-Dist, Diversity and (on labelled data)
+"""Fewer sampling steps at matched quality: FID, R-precision, MM-Dist, Diversity and (on labelled data)
 action accuracy of one model per sampler and step count, next to the seconds one motion takes, and the cheapest
 sampler whose FID is within ``tolerance`` of DDIM-50's and whose action accuracy (label captions) is within
 ``accuracy_margin`` of the best sampler's: a sampler must not trade "does it do the action" for FID.

@@ -1,4 +1,4 @@
-"""Does a local action's weight control GuidedMotion? (issue 7: "weight control works")
+"""Does a local action's weight control GuidedMotion? (the user weights of the paper's energy guidance)
 
     python -m motiondiff.studies.weight_control checkpoint=<train_latent.py ckpt> [local_model=shipped] [captions=20]
         [weights=[0,0.5,1,1.5,2]] [samples=2] [level_steps=[15,15,20]] [rho=0.01] [final_level=specific] [seed=0]

@@ -1,6 +1,6 @@
 """The official HumanML3D motion features (263 for SMPL-22, 251 for KIT-21).
 
-Follows the official procedure step by step (../shared/reference/humanml3d/PROCEDURE.md), including its quirks,
+Follows the official procedure step by step (HumanML3D's motion_representation notebook), including its quirks,
 so that features computed here match `new_joint_vecs` and features from the official data decode to `new_joints`:
 
     canonicalize_joints:  uniform skeleton -> floor at y=0 -> frame-0 root at the x,z origin -> facing +Z
