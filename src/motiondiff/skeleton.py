@@ -31,6 +31,9 @@ class Skeleton:
     fps: float | None = None
     # Chains as the dataset defines them (HumanML3D's IK walks these; each starts from the root rotation).
     chains: tuple[tuple[int, ...], ...] | None = None
+    # What each leaf joint ends in, for the End Sites of exported BVH files ("head", "hand" or "toe", see
+    # END_SITE_STATURE); None: read from the joint names (head/skull, hand/wrist/finger, toe/foot/ankle).
+    leaf_roles: dict[int, str] | None = None
 
     def __post_init__(self):
         j = len(self.joint_names)
@@ -105,6 +108,42 @@ class Skeleton:
     def with_offsets(self, offsets: np.ndarray) -> Skeleton:
         return _replace(self, offsets=np.asarray(offsets, dtype=np.float64))
 
+    def stature(self, offsets: np.ndarray | None = None) -> float | None:
+        """Standing height H (units of the offsets) estimated from the leg: hip to ankle is LEG_STATURE (0.491) H.
+        The leg is the two bones of `leg_joints`, else the left leg's bones from its knee to its first foot joint;
+        None for a skeleton without legs."""
+        lengths = np.linalg.norm(np.asarray(self.offsets if offsets is None else offsets, dtype=np.float64), axis=-1)
+        if self.leg_joints is not None:
+            leg = float(lengths[list(self.leg_joints)].sum())
+        else:
+            limb, feet = self.parts.get("left_leg", ()), self.foot_joints[0]
+            if len(limb) < 3 or not feet or feet[0] not in limb[1:]:
+                return None
+            leg = float(lengths[list(limb[1 : limb.index(feet[0]) + 1])].sum())
+        return leg / LEG_STATURE if leg > 0 else None
+
+    def end_sites(self, offsets: np.ndarray | None = None) -> dict[int, np.ndarray]:
+        """End Site OFFSET (in the leaf's own frame) of every leaf joint, on rest `offsets` (default: the
+        skeleton's): along the leaf's own bone (the bone continued past the joint; its parent's bone where the leaf's
+        is zero, +Y where both are), as long as END_SITE_STATURE says for the leaf's role times `stature`; a leaf
+        of no known role, or a skeleton without legs, continues its bone by the bone's own length. Never zero."""
+        offsets = np.asarray(self.offsets if offsets is None else offsets, dtype=np.float64)
+        lengths = np.linalg.norm(offsets, axis=-1)
+        height = self.stature(offsets)
+        scale = float(lengths.max()) if lengths.max() > 0 else 1.0
+        sites = {}
+        for leaf in (j for j, kids in enumerate(self.children) if not kids):
+            bone = next((j for j in (leaf, self.parents[leaf]) if j >= 0 and lengths[j] > 1e-9 * scale), None)
+            direction = offsets[bone] / lengths[bone] if bone is not None else np.array([0.0, 1.0, 0.0])
+            name = self.joint_names[leaf]
+            role = self.leaf_roles.get(leaf) if self.leaf_roles is not None else _leaf_role(name)
+            if role in END_SITE_STATURE and height is not None:
+                length = END_SITE_STATURE[role] * height
+            else:
+                length = lengths[bone] if bone is not None else 0.1 * scale
+            sites[leaf] = direction * length
+        return sites
+
     # ---- any skeleton (BVH) --------------------------------------------------------------------------------
     @classmethod
     def infer(cls, name: str, joint_names, parents, offsets, fps: float | None = None) -> Skeleton:
@@ -157,6 +196,25 @@ class Skeleton:
             face_joints=face,  # type: ignore[arg-type]
             fps=fps,
         )
+
+
+# ---- End Sites -------------------------------------------------------------------------------------------------
+# Where the body goes on past a leaf joint (the tip a BVH End Site marks: animation tools draw the leaf's bone up to
+# it), as fractions of the standing height H. From Drillis & Contini's segment lengths as fractions of H (tabulated in
+# D. A. Winter, Biomechanics and Motor Control of Human Movement, Fig. 4.1): the hand, wrist to fingertip, 0.108 H;
+# the foot 0.152 H, about 0.27 of it ahead of the ball of the foot where the toe joints (SMPL's l_foot/r_foot,
+# Bandai's Toes) sit: 0.041 H; the head, chin to vertex, 0.130 H, of which the half above the head joint (SMPL's
+# head joint sits about mid-head): 0.065 H. H comes from the leg (`Skeleton.stature`): hip (0.530 H) to ankle
+# (0.039 H) is 0.491 H. On HumanML3D's target skeleton (leg 0.816 m, H 1.66 m) the tips are 0.18, 0.07, 0.11 m.
+END_SITE_STATURE = {"hand": 0.108, "toe": 0.041, "head": 0.065}
+LEG_STATURE = 0.491
+_LEAF_ROLES = (("hand", re.compile(r"hand|wrist|finger|thumb|palm", re.I)),
+               ("toe", re.compile(r"toe|foot|ankle|ball", re.I)),
+               ("head", re.compile(r"head|skull|top", re.I)))  # fmt: skip
+
+
+def _leaf_role(name: str) -> str | None:
+    return next((role for role, pattern in _LEAF_ROLES if pattern.search(name)), None)
 
 
 def _replace(skel: Skeleton, **changes) -> Skeleton:
@@ -292,6 +350,7 @@ SMPL22 = Skeleton(
     leg_joints=(5, 8),
     fps=20.0,
     chains=SMPL22_CHAINS,
+    leaf_roles={15: "head", 10: "toe", 11: "toe", 20: "hand", 21: "hand"},
 )
 
 # ---- KIT-ML 21 joints (MMM model) -----------------------------------------------------------------------------
@@ -335,6 +394,7 @@ KIT21 = Skeleton(
     leg_joints=(17, 18),
     fps=12.5,
     chains=KIT21_CHAINS,
+    leaf_roles={4: "head", 7: "hand", 10: "hand", 15: "toe", 20: "toe"},
 )
 
 # ---- SMPL 24 joints (the SMPL body model's rig: HumanAct12, UESTC) ------------------------------------------------

@@ -88,7 +88,10 @@ def run(cfg: DictConfig) -> Path:
         data_root = Path(cfg.data) if cfg.data else training_data_root(module, cfg.paths.data_dir, cfg.paths.cache_dir)
         length = None if cfg.length is None else frames_from_seconds(float(cfg.length), fps)
         motion = load_input_motion(cfg.input, module, data_root=data_root, start=frames_from_seconds(cfg.start, fps),
-                                   frames=length)  # fmt: skip
+                                   frames=length, up_axis=str(cfg.get("up_axis", "auto")))  # fmt: skip
+        if motion.up is not None:
+            print(f"up axis of {cfg.input}: {motion.up.describe()}"
+                  + ("" if motion.up.axis == "+y" else ", turned to y up"))  # fmt: skip
         if motion.window != (0, motion.total_frames):
             print(f"editing frames {motion.window[0]}..{motion.window[1]} of the input's {motion.total_frames} "
                   f"(the model's maximum is {module.hparams.max_frames}; choose the window with start=/length=)")  # fmt: skip
@@ -111,7 +114,8 @@ def run(cfg: DictConfig) -> Path:
     summary = {
         "checkpoint": str(ckpt),
         "input": {"source": str(cfg.input), "clip_id": motion.clip_id, "split": motion.split, "label": motion.label,
-                  "captions": motion.captions, "window": list(motion.window), "total_frames": motion.total_frames},
+                  "captions": motion.captions, "window": list(motion.window), "total_frames": motion.total_frames,
+                  "up_axis": None if motion.up is None else motion.up.to_json()},
         "condition": condition,
         "representation": module.representation.name,
         "settings": {**result.settings, "clip_x0": module.clip_rule},

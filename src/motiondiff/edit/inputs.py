@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 from omegaconf import OmegaConf
 
+from motiondiff.data.formats.up_axis import UpAxis, detect_up_axis, parse_up_axis, undecided
 from motiondiff.data.representations import Representation
 from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face, skeleton_for_dim
@@ -43,6 +44,7 @@ class InputMotion:
     split: str | None = None
     label: str | None = None  # the dataset's content label (action models are conditioned on these)
     captions: list[str] = field(default_factory=list)
+    up: UpAxis | None = None  # a file's up axis (detected or forced) before it was turned to Y-up; None: dataset
 
     @property
     def num_frames(self) -> int:
@@ -56,13 +58,20 @@ def load_input_motion(
     data_root: str | os.PathLike | None = None,
     start: int = 0,
     frames: int | None = None,
+    up_axis: str = "auto",
 ) -> InputMotion:
     """The motion to edit, encoded in the model's representation.
 
     ``source``: a ``.bvh`` file (prepared like the dataset: joint map to SMPL-22, 20 fps, canonical placement, rig
-    rotations for rotation representations), a ``.npy`` of joints (frames, J, 3) in metres, y up, at the model's
-    fps on the representation's skeleton (hml263/kit251/jp only), or a dataset clip id, ``split:clip_id`` or a
-    bare id looked up in ``data_root`` (default: the data the model was trained on).
+    rotations for rotation representations), a ``.npy`` of joints (frames, J, 3) in metres at the model's fps on
+    the representation's skeleton (hml263/kit251/jp only; a ``.npz`` holding such an array as ``joints`` or as its
+    only array), or a dataset clip id, ``split:clip_id`` or a bare id looked up in ``data_root`` (default: the data
+    the model was trained on).
+
+    ``up_axis``: which way is up in a file: "auto" detects it (the axis the head sits above the feet along, see
+    `motiondiff.data.formats.up_axis`; a file it cannot decide warns with `UpAxisWarning` and is read as Y-up), or
+    "y", "z", "x", "-y", "-z", "-x" force it. The file is turned to Y-up before anything else; ``InputMotion.up``
+    says what was found.
 
     ``start``/``frames``: the window to edit, from input frame ``start``, ``frames`` edited frames (default: as many
     as the model's maximum length allows). A file's window is cut before it is prepared, as `prepare` cuts long
@@ -70,12 +79,16 @@ def load_input_motion(
     """
     text = str(source)
     path = Path(text)
-    if path.suffix.lower() in (".bvh", ".npy"):
+    try:
+        parse_up_axis(up_axis)
+    except ValueError as err:
+        raise EditError(str(err)) from None
+    if path.suffix.lower() in (".bvh", ".npy", ".npz"):
         if path.is_dir() or not path.is_file():
             raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path")
         load = _bvh_features if path.suffix.lower() == ".bvh" else _npy_features
-        features, window, total = load(path, module, start, frames)
-        return _input_motion(module, features, text, window, total, {})
+        features, window, total, up = load(path, module, start, frames, up_axis)
+        return _input_motion(module, features, text, window, total, {"up": up})
     features, info = _dataset_features(text, module, data_root)
     return _dataset_window(module, features, text, start, frames, info)
 
@@ -149,33 +162,61 @@ def _uses_rig(rep: Representation) -> bool:
     return rep.needs_rotations or bool(getattr(rep, "uses_rig", False))
 
 
-def _npy_features(path: Path, module, start: int, frames: int | None):
+def _load_joints(path: Path) -> np.ndarray:
+    """The joints array of a .npy, or of a .npz (its ``joints`` array, or its only array)."""
+    try:
+        data = np.load(path, allow_pickle=False)
+    except (ValueError, OSError) as err:
+        raise EditError(f"{path}: not a readable {path.suffix} array ({err})") from None
+    if not isinstance(data, np.lib.npyio.NpzFile):
+        return data
+    with data:
+        names = list(data.files)
+        if "joints" in names or len(names) == 1:
+            try:
+                return data["joints" if "joints" in names else names[0]]
+            except (ValueError, OSError) as err:
+                raise EditError(f"{path}: its joints array cannot be read ({err})") from None
+    raise EditError(f"{path}: holds arrays {', '.join(names) or '(none)'}; name the joint positions 'joints' "
+                    "(np.savez(path, joints=...)) or save them alone as .npy")  # fmt: skip
+
+
+def joints_up_axis(joints: np.ndarray, skeleton: Skeleton, up_axis: str = "auto", source: str = "<joints>") -> UpAxis:
+    """The up axis of joints (F, J, 3) on `skeleton` (its head: the last joint of its "head" part; its feet: the
+    foot joints), by `motiondiff.data.formats.up_axis.detect_up_axis`."""
+    head = skeleton.parts.get("head", ())
+    feet = [j for side in skeleton.foot_joints for j in side]
+    if parse_up_axis(up_axis) is None and not (head and feet):
+        return undecided(source, f"its skeleton {skeleton.name} names no head or no feet to tell it from")
+    return detect_up_axis(joints, head[-1] if head else 0, feet or [0], up_axis=up_axis, source=source)
+
+
+def _npy_features(path: Path, module, start: int, frames: int | None, up_axis: str = "auto"):
     rep: Representation = module.representation
     if _uses_rig(rep) and rep.name != "jp":
         raise EditError(
-            f"this model's representation {rep.name} needs joint rotations, which a .npy of joint positions does "
+            f"this model's representation {rep.name} needs joint rotations, which a file of joint positions does "
             "not have; give a .bvh file or a dataset clip id"
         )
-    try:
-        joints = np.load(path, allow_pickle=False)
-    except (ValueError, OSError) as err:
-        raise EditError(f"{path}: not a readable .npy array ({err})") from None
+    joints = _load_joints(path)
     skel = rep.skeleton
     if joints.ndim != 3 or joints.shape[1:] != (skel.num_joints, 3):
         raise EditError(
             f"{path}: joints of shape {joints.shape}, but this model ({rep.name}) reads (frames, {skel.num_joints}, "
-            f"3) joints of its {skel.name} skeleton, metres, y up, at {module.hparams.fps:g} fps; joint order: "
-            + ", ".join(skel.joint_names)
+            f"3) joints of its {skel.name} skeleton, metres, at {module.hparams.fps:g} fps (any up axis; "
+            "up_axis= forces it); joint order: " + ", ".join(skel.joint_names)
         )
     if not np.isfinite(joints).all():
         raise EditError(f"{path}: joint positions contain NaN or Inf")
+    up = joints_up_axis(joints, skel, up_axis, str(path))
+    joints = joints.astype(np.float64) @ up.matrix.T  # turned to Y-up before anything else
     window = frame_window(len(joints), rep.frames_dropped, start, frames, int(module.hparams.max_frames), str(path))
     part = joints[window[0] : window[1]].astype(np.float64)
     if rep.name == "jp" and _uses_rig(rep):  # rig joints: the native skeleton's placement rule, its own bones
         placed = place_like_dataset(part, skel)
-        return placed.reshape(len(placed), -1), window, len(joints)
+        return placed.reshape(len(placed), -1), window, len(joints), up
     canonical = canonicalize_joints(part, skel).astype(np.float32)  # as the dataset did (uniform skeleton)
-    return rep.encode(ClipMotion(joints=canonical)), window, len(joints)
+    return rep.encode(ClipMotion(joints=canonical)), window, len(joints), up
 
 
 def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
@@ -189,9 +230,11 @@ def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     return qrot(np.broadcast_to(turn, joints.shape[:-1] + (4,)), joints + shift)
 
 
-def _bvh_features(path: Path, module, start: int, frames: int | None):
-    """Features of a window of a BVH file, prepared exactly as `prepare` prepares a clip cut to a window."""
+def _bvh_features(path: Path, module, start: int, frames: int | None, up_axis: str = "auto"):
+    """Features of a window of a BVH file, turned to Y-up (`bvh_up_axis`), then prepared exactly as `prepare`
+    prepares a clip cut to a window."""
     from motiondiff.data.formats.bvh import BVHError, read_bvh
+    from motiondiff.data.formats.up_axis import bvh_up_axis
     from motiondiff.data.preparing.processing import TARGET_FPS, ClipError, process_motion
 
     rep: Representation = module.representation
@@ -208,6 +251,9 @@ def _bvh_features(path: Path, module, start: int, frames: int | None):
     except BVHError as err:
         raise EditError(str(err)) from None
     joint_map = _bvh_joint_map(module, motion, path)
+    up = bvh_up_axis(motion, joint_map, up_axis=up_axis)
+    if up.axis != "+y":
+        motion = motion.rotated(up.matrix)  # a change of basis: offsets, End Sites and rotations turn with it
     try:
         clip = process_motion(motion, joint_map)
         total = len(clip.joints)
@@ -217,7 +263,7 @@ def _bvh_features(path: Path, module, start: int, frames: int | None):
     except ClipError as err:
         raise EditError(f"{path}: {err}") from None
     if not _uses_rig(rep):
-        return rep.encode(ClipMotion(joints=clip.joints)), window, total
+        return rep.encode(ClipMotion(joints=clip.joints)), window, total, up
     rig = rep.skeleton
     if tuple(clip.native.joint_names) != tuple(rig.joint_names) or tuple(clip.native.parents) != tuple(rig.parents):
         raise EditError(
@@ -226,7 +272,8 @@ def _bvh_features(path: Path, module, start: int, frames: int | None):
             f"{rep.name} needs the same rig: use a model with hml263 features or a BVH of the training skeleton"
         )
     offsets = clip.native.offsets.astype(np.float64)
-    return rep.encode(ClipMotion(clip.joints, clip.native_rotations, clip.native_root, offsets, rig)), window, total
+    features = rep.encode(ClipMotion(clip.joints, clip.native_rotations, clip.native_root, offsets, rig))
+    return features, window, total, up
 
 
 def _bvh_joint_map(module, motion, path: Path):

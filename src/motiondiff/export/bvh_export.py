@@ -5,7 +5,11 @@ Units: the file holds the input's units (metres in this project) times `scale` (
 file); `read_bvh` gives file units back, so `read_bvh(path).scaled(1 / scale)` returns metres. Joints keep the
 skeleton's names (whitespace turned into '_', which BVH cannot hold); the file lists them depth-first, so look
 them up by name after reading. Channels: root 'Xposition Yposition Zposition Zrotation Xrotation Yrotation',
-other joints 'Zrotation Xrotation Yrotation'; leaves get a zero End Site.
+other joints 'Zrotation Xrotation Yrotation'. End Sites: every leaf (SMPL-22's head, toes and wrists) gets one with a
+real length, so animation tools draw the leaf's bone (a zero End Site makes Blender warn "zero length node"):
+`Skeleton.end_sites`, along the leaf's own bone, as long as the top of the head (0.065 H), the toes past the ball
+of the foot (0.041 H) and the hand (0.108 H) of a body of standing height H estimated from the leg (anatomical
+proportions of Drillis & Contini, see `motiondiff.skeleton.END_SITE_STATURE`).
 
 Every export reports its fit error: the distance between the written motion's forward kinematics and the joints
 it was made from (metres, before `scale`).
@@ -86,8 +90,9 @@ def export_bvh(
         rotations, root = solve_rotations(joints, skeleton, offsets, twist_half_life=TWIST_HALF_LIFE_S * fps)
         method = "ik"
     names = [re.sub(r"\s+", "_", n) for n in skeleton.joint_names]
+    end_sites = {j: site * scale for j, site in skeleton.end_sites(offsets).items()}
     motion = motion_from_arrays(
-        names, skeleton.parents, offsets * scale, rotations, root * scale, fps, source=str(path)
+        names, skeleton.parents, offsets * scale, rotations, root * scale, fps, end_sites=end_sites, source=str(path)
     )
     distance = np.linalg.norm(motion.positions() / scale - joints, axis=-1)
     write_bvh(path, motion)

@@ -1,6 +1,7 @@
 """BVH export (motiondiff.export.bvh_export) and export_motion: export -> read_bvh -> FK gives back the exported
 joints (acceptance: <= 1e-3 m) on synthetic motions and on every real clip of the embedded val split, through IK
-(positions) and as written rotations (rotation representations), plus units, fit reports and bad input."""
+(positions) and as written rotations (rotation representations), plus units, fit reports and bad input; End Sites
+of real length on every leaf, and the files read by bvhio (an independent reader) with no zero-length bone."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import os
 
 import numpy as np
 import pytest
+from fixtures.bvh_reader import bone_lengths, bvhio_positions
 from scipy.spatial.transform import Rotation
 
 from motiondiff.data.datamodules import embedded_data_root
@@ -169,3 +171,68 @@ def test_bad_input_is_refused_and_leaves_nothing(tmp_path, val):
     with pytest.raises(FileNotFoundError, match="does not exist"):
         export_bvh(tmp_path / "missing" / "deeper" / "x.bvh", joints, SMPL22, 20)
     assert list(tmp_path.iterdir()) == []
+
+
+# ---- End Sites, and the files read by an independent reader ---------------------------------------------------------
+def test_an_independent_reader_gives_back_every_real_clip_in_centimetres(val, tmp_path):
+    """The acceptance criterion with bvhio instead of the project's reader: the 22 joints' world positions of every
+    frame, after units, equal the exported joints to <= 1e-3 m; no bone in any file has zero length."""
+    _, clips = val
+    worst, shortest = 0.0, np.inf
+    for i, clip in enumerate(clips):
+        path = export_bvh(tmp_path / f"clip{i}.bvh", clip.joints, SMPL22, fps=20, scale=100.0).path
+        positions = bvhio_positions(path, SMPL22.joint_names) / 100.0
+        assert positions.shape == clip.joints.shape
+        worst = max(worst, float(np.linalg.norm(positions - clip.joints, axis=-1).max()))
+        lengths = bone_lengths(path)
+        assert len([k for k in lengths if k.startswith("End Site")]) == 5
+        shortest = min(shortest, min(lengths.values()) / 100.0)
+    print(f"\nbvhio, {len(clips)} real clips exported in cm: max position error {worst:.2e} m, shortest bone "
+          f"{shortest:.4f} m")  # fmt: skip
+    assert worst <= TOL and shortest > 0.01
+
+
+def test_rotation_representation_files_read_by_bvhio(val, tmp_path):
+    """A rotation representation's file (the Bandai rig, rotations written as given) also reads back in bvhio, and
+    its leaves (Head, Hand_L/R, Toes_L/R) have End Sites of real length too."""
+    rig, clips = val
+    rep = get_representation("rp6jr", SMPL22, rig)
+    report = export_bvh_from_features(tmp_path / "rig.bvh", rep, rep.encode(clips[3]), fps=20, offsets=clips[3].offsets)
+    positions = bvhio_positions(report.path, rig.joint_names)
+    assert np.linalg.norm(positions - clips[3].rig_positions(), axis=-1).max() <= TOL
+    lengths = bone_lengths(report.path)
+    assert {k for k in lengths if k.startswith("End Site")} == {f"End Site {n}" for n in
+                                                                 ("Head", "Hand_L", "Hand_R", "Toes_L", "Toes_R")}  # fmt: skip
+    assert min(lengths.values()) > 0.01
+
+
+def test_end_sites_have_anatomical_lengths_along_the_leaf_bone(val, tmp_path):
+    _, clips = val
+    report = export_bvh(tmp_path / "walk.bvh", clips[0].joints, SMPL22, fps=20)
+    motion = read_bvh(report.path)
+    names = motion.joint_names
+    leg = sum(np.linalg.norm(motion.offsets[names.index(n)]) for n in ("r_knee", "r_ankle"))
+    stature = leg / 0.491
+    assert 1.4 < stature < 2.0
+    expected = {"head": 0.065, "l_foot": 0.041, "r_foot": 0.041, "l_wrist": 0.108, "r_wrist": 0.108}
+    assert {names[j] for j in motion.end_sites} == set(expected)
+    for j, site in motion.end_sites.items():
+        bone = motion.offsets[j]
+        assert np.isclose(np.linalg.norm(site), expected[names[j]] * stature)
+        assert np.allclose(site / np.linalg.norm(site), bone / np.linalg.norm(bone))  # the leaf's bone, continued
+    # on HumanML3D's target skeleton: the hand 0.18 m, the toes 0.07 m, the top of the head 0.11 m
+    sites = SMPL22.end_sites()
+    assert np.allclose([np.linalg.norm(sites[j]) for j in (20, 10, 15)], [0.1795, 0.0681, 0.1080], atol=5e-4)
+
+
+def test_every_skeleton_gets_end_sites_of_real_length():
+    from motiondiff.data.formats.bvh import continued_end_sites
+    from motiondiff.skeleton import KIT21, SMPL24
+
+    for skeleton in (SMPL22, KIT21, SMPL24):
+        sites = skeleton.end_sites()
+        assert set(sites) == {j for j, kids in enumerate(skeleton.children) if not kids}
+        assert min(np.linalg.norm(v) for v in sites.values()) > 0.01
+    bare = Skeleton.infer("bare", ["root", "a", "b"], [-1, 0, 1], np.array([[0, 0, 0], [0, 1, 0], [0, 0, 0]]))
+    assert np.allclose(bare.end_sites()[2], [0, 1, 0])  # a zero leaf bone: its parent's bone, continued
+    assert np.allclose(continued_end_sites([-1, 0, 0], [[0, 0, 0], [2, 0, 0], [0, 0, 3]])[2], [0, 0, 3])

@@ -31,6 +31,8 @@ from motiondiff.rotations import (
     matrix_to_euler,
     matrix_to_quat,
     qfix,
+    qinv,
+    qmul,
     qslerp,
     quat_to_matrix,
 )
@@ -42,6 +44,7 @@ __all__ = [
     "DEFAULT_JOINT_CHANNELS",
     "DEFAULT_ROOT_CHANNELS",
     "VALID_CHANNELS",
+    "continued_end_sites",
     "format_bvh",
     "motion_from_arrays",
     "parse_bvh",
@@ -112,6 +115,26 @@ class BVHMotion:
             offsets=self.offsets * factor,
             translations=self.translations * factor,
             end_sites={j: v * factor for j, v in self.end_sites.items()},
+        )
+
+    def rotated(self, matrix: np.ndarray) -> BVHMotion:
+        """The same motion in turned axes, `matrix` (3, 3) a rotation with new = matrix @ old (e.g.
+        `motiondiff.data.formats.up_axis.rotation_to_y_up("+z")` for a Z-up file): a change of basis, so offsets,
+        translations and End Sites are turned and every local rotation q becomes r q r^-1. World positions turn
+        with it and the rest pose stays the same pose in the new axes. Writing the result keeps each joint's
+        channels, which holds a turned rotation exactly only for joints with all three rotation channels."""
+        matrix = np.asarray(matrix, dtype=np.float64)
+        proper = matrix.shape == (3, 3) and np.allclose(matrix @ matrix.T, np.eye(3), atol=1e-9)
+        if not (proper and np.linalg.det(matrix) > 0):
+            raise ValueError(f"BVHMotion.rotated: matrix must be a 3x3 rotation (orthonormal, det +1), got {matrix}")
+        r = matrix_to_quat(matrix)
+        rotations = qmul(qmul(np.broadcast_to(r, self.rotations.shape), self.rotations), qinv(r))
+        return replace(
+            self,
+            offsets=self.offsets @ matrix.T,
+            translations=self.translations @ matrix.T,
+            end_sites={j: matrix @ v for j, v in self.end_sites.items()},
+            rotations=qfix(rotations),
         )
 
     def slice(self, start: int | None = None, stop: int | None = None) -> BVHMotion:
@@ -350,8 +373,10 @@ def motion_from_arrays(
 ) -> BVHMotion:
     """A BVHMotion from local quaternions (F, J, 4) and translations: (F, J, 3), or (F, 3) root positions
     with the other joints at their offsets. Default channels: root 'Xposition Yposition Zposition Zrotation
-    Xrotation Yrotation', others 'Zrotation Xrotation Yrotation'. Leaves get a zero End Site unless
-    end_sites is given. Non-root translations are only kept where a joint has position channels."""
+    Xrotation Yrotation', others 'Zrotation Xrotation Yrotation'. Leaves get an End Site that continues their
+    own bone by its length (`continued_end_sites`; animation tools warn about zero-length End Sites) unless
+    end_sites is given (`Skeleton.end_sites` has anatomical ones). Non-root translations are only kept where a
+    joint has position channels."""
     parents = np.asarray(parents, dtype=np.int64)
     offsets = np.asarray(offsets, dtype=np.float64)
     rotations = np.asarray(rotations, dtype=np.float64)
@@ -363,8 +388,24 @@ def motion_from_arrays(
     if channels is None:
         channels = [DEFAULT_ROOT_CHANNELS if p < 0 else DEFAULT_JOINT_CHANNELS for p in parents.tolist()]
     if end_sites is None:
-        leaves = set(range(len(parents))) - set(parents.tolist())
-        end_sites = {j: np.zeros(3) for j in sorted(leaves)}
+        end_sites = continued_end_sites(parents, offsets)
     return BVHMotion(
         list(joint_names), parents, offsets, channels, end_sites, 1.0 / fps, rotations, translations, source
     )
+
+
+def continued_end_sites(parents, offsets) -> dict[int, np.ndarray]:
+    """End Site of every leaf joint continuing its bone: the leaf's own OFFSET again (its parent's where the leaf's
+    is zero; 0.1 of the longest bone along +Y where both are). Never zero for a skeleton with any bone."""
+    parents = np.asarray(parents, dtype=np.int64)
+    offsets = np.asarray(offsets, dtype=np.float64)
+    lengths = np.linalg.norm(offsets, axis=-1)
+    tiny = 1e-9 * max(float(lengths.max(initial=0.0)), 1e-12)
+    sites = {}
+    for leaf in sorted(set(range(len(parents))) - set(parents.tolist())):
+        bone = next((j for j in (leaf, int(parents[leaf])) if j >= 0 and lengths[j] > tiny), None)
+        if bone is not None:
+            sites[leaf] = offsets[bone].copy()
+        else:
+            sites[leaf] = np.array([0.0, 0.1 * float(lengths.max(initial=0.0)) or 0.1, 0.0])
+    return sites
