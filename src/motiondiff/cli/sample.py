@@ -231,7 +231,9 @@ def sample_long(cfg, out, module, prompts: list, seconds: list[float], guidance,
         resample=int(cfg.resample), labels=prompts, progress=True,
     )  # fmt: skip
     title = ", ".join(f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True))
-    rows = save_samples(out, title, long.features, module, formats, sigma, stem=f"long_{slug(' then '.join(prompts))}")
+    shown = [(s["start"], str(s["label"])) for s in long.segments]  # the videos show the prompt playing
+    rows = save_samples(out, title, long.features, module, formats, sigma, stem=f"long_{slug(' then '.join(prompts))}",
+                        title=shown)  # fmt: skip
     seams, blends = [w.plan.start for w in long.windows[1:]], [w.plan.blend for w in long.windows[1:]]
     for row, joints, boundaries in zip(rows, long.joints, long.boundaries, strict=True):
         if sigma is not None:  # the filter also runs across the seams: how they look in the saved joints
@@ -251,10 +253,18 @@ def sample_long(cfg, out, module, prompts: list, seconds: list[float], guidance,
 
 
 def save_samples(
-    out: Path, prompt: str | None, feats: np.ndarray, module, formats, sigma: float | None = None, stem=None
+    out: Path,
+    prompt: str | None,
+    feats: np.ndarray,
+    module,
+    formats,
+    sigma: float | None = None,
+    stem=None,
+    title=None,
 ) -> list[dict]:
     """Joints, features and the ``formats`` (export.outputs) per sample; with ``sigma`` the saved joints are the
-    smoothed ones (the raw ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after."""
+    smoothed ones (the raw ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after.
+    ``title``: what the videos and viewer show (default the prompt; a long motion's (first frame, prompt) segments)."""
     rep = module.representation
     bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
     fps = module.hparams.fps
@@ -273,7 +283,7 @@ def save_samples(
                          "measured_on": "HumanML3D features of the joints, as evaluate.py"}  # fmt: skip
         np.save(f"{stem_k}_joints.npy", joints)
         np.save(f"{stem_k}_features.npy", f.astype(np.float32))
-        exports = export_features(stem_k, rep, f, fps, formats, title=prompt or "unconditioned",
+        exports = export_features(stem_k, rep, f, fps, formats, title=title or prompt or "unconditioned",
                                   joints=joints if sigma is not None else None)  # fmt: skip
         facts = measure(feature_joints, fps)
         speed = mean_joint_speed(feature_joints, fps)

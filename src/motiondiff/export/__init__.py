@@ -15,7 +15,7 @@ import numpy as np
 from motiondiff.atomic import atomic_write
 from motiondiff.export.bvh_export import ExportReport, export_bvh, export_bvh_from_features
 from motiondiff.export.html_viewer import export_html
-from motiondiff.export.render import render_motion
+from motiondiff.export.render import Title, render_motion
 from motiondiff.skeleton import Skeleton
 
 __all__ = ["FORMATS", "ExportReport", "export_bvh", "export_bvh_from_features", "export_html", "export_motion"]
@@ -29,7 +29,7 @@ def export_motion(
     skeleton: Skeleton,
     fps: float,
     formats: list[str],
-    title: str = "",
+    title: Title = "",
     rotations: np.ndarray | None = None,
     root: np.ndarray | None = None,
 ) -> dict[str, Path]:

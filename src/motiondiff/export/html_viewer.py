@@ -13,13 +13,13 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.atomic import atomic_write
-from motiondiff.export.render import _chain_color
+from motiondiff.export.render import Title, _chain_color, camera_azimuth, head_joint, title_at
 from motiondiff.skeleton import Skeleton
 
 __all__ = ["export_html"]
 
 _GRID_STEP = 0.5  # metres between ground grid lines, as in the videos
-_GRID_COLOR, _TRAIL_COLOR = "#bbbbbb", "#ff9900"
+_GRID_COLOR, _TRAIL_COLOR, _HEAD_COLOR = "#bbbbbb", "#ff9900", "#333333"
 
 # Runs after the plot and its frames exist: jump to the frame in the URL hash ('#frame=K'), now and on changes.
 _DEEP_LINK_JS = """
@@ -39,9 +39,17 @@ window.addEventListener('hashchange', function () { showFrame(frameFromHash()); 
 
 
 def export_html(
-    path: str | os.PathLike, joints: np.ndarray, skeleton: Skeleton, fps: float, title: str = "", *, trail: bool = True
+    path: str | os.PathLike,
+    joints: np.ndarray,
+    skeleton: Skeleton,
+    fps: float,
+    title: Title = "",
+    *,
+    trail: bool = True,
 ) -> Path:
-    """Write an interactive viewer of joints (N, J, 3) (metres, y up) to `path` (.html), atomically."""
+    """Write an interactive viewer of joints (N, J, 3) (metres, y up) to `path` (.html), atomically. The camera
+    starts front-side of the travel direction (as the videos); ``title``: one text, or (first frame, text)
+    segments shown as the motion plays."""
     import plotly.io as pio
 
     path = Path(path)
@@ -63,16 +71,26 @@ def export_html(
     # on it, so the file grows linearly with the motion's length.
     static = [_grid(ranges)] + ([_trace(on_ground, "lines", _TRAIL_COLOR, 3, "trail")] if trail else [])
 
+    head = [j for j in [head_joint(skeleton)] if j is not None]
+
     def moving_traces(i: int) -> list[dict]:
         bones = [_trace(shown[i, chain], "lines", color, 6, f"chain {k}") for k, (chain, color) in enumerate(chains)]
-        return [*bones, _trace(on_ground[i : i + 1], "markers", _TRAIL_COLOR, 4, "root")]
+        return [*bones, _trace(on_ground[i : i + 1], "markers", _TRAIL_COLOR, 4, "root"),
+                _trace(shown[i, head], "markers", _HEAD_COLOR, 9, "head")]  # fmt: skip
 
-    moving = list(range(len(static), len(static) + len(chains) + 1))  # frames update these traces only
+    def frame(i: int) -> dict:
+        shown_frame = {"name": str(i), "data": moving_traces(i), "traces": moving}
+        if not isinstance(title, str):  # a long motion: the title follows the segment playing
+            shown_frame["layout"] = {"title": {"text": title_at(title, i), "x": 0.5}}
+        return shown_frame
+
+    moving = list(range(len(static), len(static) + len(chains) + 2))  # frames update these traces only
+    azim = np.radians(camera_azimuth(joints, skeleton))  # matplotlib's azimuth: its x-y plane is our x-z ground
     figure = {
         "data": [*static, *moving_traces(0)],
-        "frames": [{"name": str(i), "data": moving_traces(i), "traces": moving} for i in range(len(joints))],
+        "frames": [frame(i) for i in range(len(joints))],
         "layout": {
-            "title": {"text": title, "x": 0.5},
+            "title": {"text": title_at(title, 0), "x": 0.5},
             "showlegend": False,
             "margin": {"l": 0, "r": 0, "t": 40 if title else 10, "b": 0},
             "paper_bgcolor": "white",
@@ -80,7 +98,10 @@ def export_html(
                 **{f"{axis}axis": _axis(axis, r) for axis, r in zip("xyz", ranges, strict=True)},
                 "aspectmode": "manual",
                 "aspectratio": dict(zip("xyz", aspect, strict=True)),
-                "camera": {"up": {"x": 0, "y": 1, "z": 0}, "eye": {"x": 1.2, "y": 0.7, "z": 1.6}},
+                "camera": {
+                    "up": {"x": 0, "y": 1, "z": 0},
+                    "eye": {"x": 2.0 * np.cos(azim), "y": 0.7, "z": 2.0 * np.sin(azim)},
+                },
             },
             "uirevision": "keep",  # animating must not reset a camera the user has turned
             "updatemenus": [_play_pause(fps)],

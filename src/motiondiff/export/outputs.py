@@ -15,6 +15,7 @@ import numpy as np
 from motiondiff.data.representations import Representation
 from motiondiff.export import export_motion
 from motiondiff.export.bvh_export import export_bvh, export_bvh_from_features
+from motiondiff.export.render import Title
 
 OUTPUT_FORMATS = ("mp4", "gif", "bvh", "html")  # the arrays (.npy) are always written
 
@@ -41,7 +42,7 @@ def export_features(
     features: np.ndarray,
     fps: float,
     formats: Sequence[str],
-    title: str = "",
+    title: Title = "",
     joints: np.ndarray | None = None,
 ) -> dict:
     """Write ``{stem}.{format}`` for each format; returns {format: path} and, with a BVH, its fit error

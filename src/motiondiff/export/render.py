@@ -6,6 +6,7 @@ Files are written to a temporary name and renamed, so a failed render leaves not
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -25,11 +26,17 @@ def _chain_color(chain: tuple[int, ...], skeleton: Skeleton) -> str:
     return _COLORS["torso"]
 
 
+Title = str | Sequence[tuple[int, str]]  # one title, or (first frame, title) per segment of a long motion
+
+
 def stick_figure_animation(
-    joints: np.ndarray, skeleton: Skeleton, title: str = "", fps: float = 20.0, dpi: int = 80, step: int = 1
+    joints: np.ndarray, skeleton: Skeleton, title: Title = "", fps: float = 20.0, dpi: int = 80, step: int = 1
 ):
     """A matplotlib FuncAnimation of (N, J, 3) joints (metres, y up): every ``step``-th frame, ground grid, root
-    trail. Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``; close its figure when done
+    trail, a head marker. The camera follows the root at a fixed distance, so the body fills the frame however far
+    it travels, and looks from the front-side of the travel direction (or of the facing when it stays in place),
+    never along the line of motion. ``title``: one text, or (first frame, text) segments shown as they play.
+    Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``; close its figure when done
     (``plt.close(anim._fig)``)."""
     import matplotlib.pyplot as plt
     from matplotlib import animation
@@ -38,39 +45,82 @@ def stick_figure_animation(
     if joints.ndim != 3 or joints.shape[1:] != (skeleton.num_joints, 3):
         raise ValueError(f"expected joints (frames, {skeleton.num_joints}, 3), got {joints.shape}")
     fig = plt.figure(figsize=(4, 4), dpi=dpi)
+    fig.subplots_adjust(left=0, right=1, bottom=0, top=1)
     ax = fig.add_subplot(projection="3d")
+    ax.set_box_aspect((1, 1, 1), zoom=ZOOM)
     trail = joints[:, 0, [0, 2]]
-    lo, hi = joints.reshape(-1, 3).min(0), joints.reshape(-1, 3).max(0)
-    centre = (lo + hi) / 2
-    radius = max(1.0, float((hi - lo)[[0, 2]].max()) / 2 + 0.3)
+    height = float((joints[..., 1].max(axis=1) - np.minimum(joints[..., 1].min(axis=1), 0)).max())
+    half = max(0.6, 0.55 * height)  # half the side of the followed cube: the body's height fills it
+    azim = camera_azimuth(joints, skeleton)
+    head = head_joint(skeleton)
     chains = [(c, _chain_color(c, skeleton)) for c in skeleton.kinematic_chains]
 
     def draw(i: int):
         ax.clear()
-        ax.set_title(_wrap(title), fontsize=8)
-        ax.set_xlim(centre[0] - radius, centre[0] + radius)
-        ax.set_ylim(centre[2] - radius, centre[2] + radius)
-        ax.set_zlim(0, max(2.0, hi[1] + 0.1))
         ax.set_axis_off()
-        ax.view_init(elev=20, azim=-60)
-        grid = np.arange(np.floor(centre[0] - radius), np.ceil(centre[0] + radius) + 0.5, 0.5)
-        grid_z = np.arange(np.floor(centre[2] - radius), np.ceil(centre[2] + radius) + 0.5, 0.5)
-        for g in grid:  # ground grid (matplotlib's y is our z: the ground is its x-y plane)
-            ax.plot([g, g], [grid_z[0], grid_z[-1]], [0, 0], color="#dddddd", lw=0.5)
-        for g in grid_z:
-            ax.plot([grid[0], grid[-1]], [g, g], [0, 0], color="#dddddd", lw=0.5)
+        ax.view_init(elev=ELEVATION, azim=azim)
+        cx, cz = trail[i]
+        ax.set_xlim(cx - half, cx + half)
+        ax.set_ylim(cz - half, cz + half)
+        ax.set_zlim(0, 2 * half)
+        text = title_at(title, i)
+        if text:
+            ax.text2D(0.5, 0.97, _wrap(text), transform=ax.transAxes, ha="center", va="top", fontsize=8)
+        for g in np.arange(np.floor(cx - half), np.ceil(cx + half) + 0.25, 0.5):  # ground grid, world-fixed
+            ax.plot([g, g], [cz - half, cz + half], [0, 0], color="#dddddd", lw=0.5)
+        for g in np.arange(np.floor(cz - half), np.ceil(cz + half) + 0.25, 0.5):
+            ax.plot([cx - half, cx + half], [g, g], [0, 0], color="#dddddd", lw=0.5)
         ax.plot(trail[: i + 1, 0], trail[: i + 1, 1], np.zeros(i + 1), color="#ff9900", lw=1.5)
         frame = joints[i]
         for chain, color in chains:
             ax.plot(frame[list(chain), 0], frame[list(chain), 2], frame[list(chain), 1], color=color, lw=2.5)
+        if head is not None:
+            ax.scatter(*frame[head, [0, 2, 1]], s=90, color=_COLORS["torso"], depthshade=False)
         return []
 
     frames = range(0, len(joints), max(1, int(step)))
     return animation.FuncAnimation(fig, draw, frames=frames, interval=1000 * max(1, int(step)) / fps)
 
 
+ELEVATION = 15  # degrees above the ground: low enough to read heights, high enough to see the ground trail
+ZOOM = 1.35  # matplotlib's 3D box leaves wide margins at zoom 1
+SIDE_ANGLE = 55  # degrees between the travel (or facing) direction and the camera: front-side, never edge-on
+
+
+def camera_azimuth(joints: np.ndarray, skeleton: Skeleton) -> float:
+    """matplotlib azimuth (degrees; its x-y plane is our x-z ground) of a camera SIDE_ANGLE off the direction the
+    root travels, or, for motion that stays in place (< 0.5 m), off the direction the body faces in frame 0."""
+    travel = joints[-1, 0, [0, 2]] - joints[0, 0, [0, 2]]
+    if np.linalg.norm(travel) >= 0.5:
+        forward = travel
+    elif skeleton.face_joints is not None:
+        r_hip, l_hip, r_sho, l_sho = skeleton.face_joints
+        across = joints[0, r_hip] - joints[0, l_hip] + joints[0, r_sho] - joints[0, l_sho]
+        forward = np.cross([0.0, 1.0, 0.0], across)[[0, 2]]  # up x (right - left) = forward
+    else:
+        forward = np.array([0.0, 1.0])  # +z, the canonical facing
+    return float(np.degrees(np.arctan2(forward[1], forward[0]))) + SIDE_ANGLE
+
+
+def head_joint(skeleton: Skeleton) -> int | None:
+    """The joint drawn as the head: the leaf that ends in a head, else the last joint of the head part."""
+    roles = skeleton.leaf_roles or {}
+    heads = [j for j, role in roles.items() if role == "head"] or list(skeleton.parts.get("head", ()))[-1:]
+    return heads[0] if heads else None
+
+
+def title_at(title: Title, frame: int) -> str:
+    if isinstance(title, str):
+        return title
+    current = ""
+    for start, text in title:
+        if frame >= start:
+            current = text
+    return current
+
+
 def render_motion(
-    joints: np.ndarray, skeleton: Skeleton, path: str | Path, title: str = "", fps: float = 20.0, dpi: int = 80
+    joints: np.ndarray, skeleton: Skeleton, path: str | Path, title: Title = "", fps: float = 20.0, dpi: int = 80
 ) -> Path:
     """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif)."""
     import logging
