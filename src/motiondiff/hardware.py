@@ -34,3 +34,24 @@ def cpu_model() -> str:
     except OSError:
         pass
     return platform.processor() or "unknown"
+
+
+def resolve_device(name: str) -> str:
+    """The torch device of ``device=``: ``auto`` is CUDA where a GPU is visible, else the CPU; an explicit device
+    that this machine lacks is one clear error instead of torch's traceback deep inside loading."""
+    import torch
+
+    from motiondiff.errors import UsageError
+
+    name = str(name).strip().lower()
+    if name == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    if name.startswith("cuda") and not torch.cuda.is_available():
+        raise UsageError(f"device={name} but this machine has no CUDA device torch can use; use device=auto or cpu")
+    if name.startswith("mps") and not torch.backends.mps.is_available():
+        raise UsageError(f"device={name} but MPS is not available here; use device=auto or cpu")
+    try:
+        torch.device(name)
+    except RuntimeError:
+        raise UsageError(f"unknown device={name!r}; use auto, cpu, cuda or cuda:<index>") from None
+    return name

@@ -168,6 +168,8 @@ CASES = [
     Case("text_empty", sample("text=''"), UsageError, "the text is empty"),
     Case("text_whitespace", sample("text='   '"), UsageError, "the text is empty"),
     Case("text_10000_characters", sample("text=" + "a" * 10000), UsageError, "keep it under"),
+    Case("device_cuda_without_cuda", sample("text=walk", "device=cuda"), UsageError, "no CUDA device"),
+    Case("device_unknown", sample("text=walk", "device=quantum"), UsageError, "unknown device='quantum'"),
     Case("length_zero", sample("text=walk", "length=0"), UsageError, "length must be positive"),
     Case("length_negative", sample("text=walk", "length=-3"), UsageError, "length must be positive"),
     Case("length_beyond_maximum", sample("text=walk", "length=600"), UsageError, "ask for a shorter length"),

@@ -17,6 +17,7 @@ from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import export_features
+from motiondiff.hardware import resolve_device
 from motiondiff.lit.conditions import check_action, check_text
 from motiondiff.lit.loading import load_model as load_module
 from motiondiff.studies.editing import edit_numbers
@@ -78,6 +79,7 @@ def _check(cfg: DictConfig, module) -> int | None:
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_SAMPLE)  # types and ranges before any work
+    cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     formats = export_formats(cfg)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)

@@ -34,6 +34,7 @@ from motiondiff.eval.protocol import (
     multimodality,
     replication_metrics,
 )
+from motiondiff.hardware import resolve_device
 
 log = logging.getLogger(__name__)
 PROTOCOL = {"text": "text", "action": "action", "none": "unconstrained"}
@@ -208,6 +209,7 @@ def _log_wandb(out: Path, cfg: DictConfig, rows: dict, extra: dict) -> None:
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_EVALUATE)  # types and ranges before any work
+    cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     from motiondiff.lit.loading import load_model as load_module
 
     out = Path(HydraConfig.get().runtime.output_dir)

@@ -32,6 +32,7 @@ from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.export.outputs import export_features, parse_formats
+from motiondiff.hardware import resolve_device
 from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.lit.generation import generate_features
@@ -133,6 +134,7 @@ def slug(text: str | None) -> str:
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_SAMPLE)  # types and ranges before any work
+    cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     if cfg.get("method", "mdm") not in ("mdm", "vvmdm"):  # sample.py runs method=guidedmotion with cli.sample_guided
         raise UsageError(f"unknown method={cfg.method!r}; choose mdm, vvmdm or guidedmotion")
     out = Path(HydraConfig.get().runtime.output_dir)

@@ -16,6 +16,7 @@ from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, find_checkpoint
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
+from motiondiff.hardware import resolve_device
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.models.hierarchical import LEVELS
 
@@ -49,6 +50,7 @@ def run(cfg: DictConfig) -> Path:
     from motiondiff.pipelines import GuidedMotionPipeline
 
     out = Path(HydraConfig.get().runtime.output_dir)
+    cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     if cfg.text is None:
         raise UsageError('method=guidedmotion needs text="..." (one caption; its verbs become the local actions)')
     text = check_text(cfg.text)
