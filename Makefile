@@ -12,7 +12,7 @@ export HF_HOME := $(CURDIR)/.cache/huggingface
 export HF_HUB_OFFLINE := 1
 export TRANSFORMERS_OFFLINE := 1
 
-.PHONY: setup train test bench lint format data data-full lock clean guided-compare
+.PHONY: setup train test bench lint format data data-full lock clean guided-compare notebooks
 
 # Training and the benchmark run with tcmalloc where it is installed (`make allocator` installs Debian's as root):
 # glibc returns every freed tensor above 32 MB to the kernel and page-faults it back in on the next step, which made
@@ -62,6 +62,12 @@ browser:
 .PHONY: allocator
 allocator:
 	$(call debian_package,ls /usr/lib/*/libtcmalloc_minimal.so.4 >/dev/null 2>&1,libtcmalloc-minimal4,(faster CPU training),training runs with glibc's allocator (slower))
+
+# Run the notebooks and keep their outputs (figures, the quick start's GIF), so a reader on a code host sees them.
+notebooks: setup
+	$(PY) -c 'import sys, nbformat, nbclient; \
+	[nbformat.write(nbclient.NotebookClient(nbformat.read(p, 4), timeout=600, kernel_name="python3", \
+	 resources={"metadata": {"path": "notebooks"}}).execute(), p) for p in sys.argv[1:]]' notebooks/*.ipynb
 
 # Time training, the forward pass, sampling and text encoding on this machine (<= 10 min on 2 cores); writes
 # bench/results/latest.{json,md}. Run it on an otherwise idle machine: other work skews every row.

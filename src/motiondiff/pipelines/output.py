@@ -78,6 +78,20 @@ class MotionOutput:
             return html
         return HTML(html)
 
+    def gif(self, i: int = 0, dpi: int = 60):
+        """Motion ``i`` as an animated GIF for a notebook (an IPython Image; the GIF bytes in plain Python). Unlike
+        ``show``'s interactive viewer, an image output stays in a saved notebook and shows on code hosts."""
+        from motiondiff.export.render import render_motion
+
+        with tempfile.TemporaryDirectory() as tmp:
+            data = render_motion(self.joints[i], self.skeleton, Path(tmp) / "motion.gif", title=self.prompts[i] or "",
+                                 fps=self.fps, dpi=dpi).read_bytes()  # fmt: skip
+        try:
+            from IPython.display import Image
+        except ImportError:
+            return data
+        return Image(data=data, format="gif")
+
     def _changed(self, i: int) -> np.ndarray | None:
         """The joints when they are not the features decoded as they are (smoothed or edited after decoding)."""
         return self.joints[i] if self.info.get("joints_changed") else None
