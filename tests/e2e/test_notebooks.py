@@ -17,4 +17,5 @@ def test_notebook_runs(path, tmp_path):
     NotebookClient(nb, timeout=120, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}).execute()
     outputs = [o for cell in nb.cells if cell.cell_type == "code" for o in cell.outputs]
     assert not [o for o in outputs if o.output_type == "error"]
-    assert any(o.output_type == "display_data" for o in outputs)  # the figure was drawn
+    shown = [k for o in outputs if o.output_type in ("display_data", "execute_result") for k in o.get("data", {})]
+    assert any(k.startswith("image/") or k == "text/html" for k in shown)  # a figure or an animation was shown
