@@ -20,7 +20,7 @@ from motiondiff.demo.models import GLB_NOTE, MAX_SAMPLES, DemoModels, Sample, ge
 from motiondiff.errors import UsageError
 
 log = logging.getLogger(__name__)
-VIEWER_HEIGHT = 600
+VIEWER_HEIGHT = 600  # px; the viewer page fills it (plot and play bar)
 
 
 def viewer_iframe(page: Path, title: str) -> str:
