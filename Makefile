@@ -52,11 +52,13 @@ define debian_package
 	else echo "note: no $(2) and no root apt-get; $(4)"; fi
 endef
 
-# The HTML viewer's end-to-end test screenshots it in headless Chromium (that test skips with the reason without it).
+# The HTML viewer's end-to-end test screenshots it in headless Chromium, and the web demo's test drives the page with
+# Selenium through chromedriver (each test skips with the reason without them).
 .PHONY: browser
 browser:
 	$(call debian_package,command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
 		command -v google-chrome >/dev/null 2>&1,chromium,for the HTML viewer test,the HTML viewer screenshot test will skip)
+	$(call debian_package,command -v chromedriver >/dev/null 2>&1,chromium-driver,for the web demo test,the web demo browser test will skip)
 
 # tcmalloc for training (above).
 .PHONY: allocator

@@ -144,3 +144,19 @@ def test_guided_pipeline_from_python(latent_ckpt):
     assert [a["weight"] for a in out.info["local_actions"]] == [2.0, 0.5]
     with pytest.raises(UsageError, match="one per action"):
         pipe(CAPTION, local_weights=[1.0])
+
+
+def test_web_demo_offers_guidedmotion_with_a_weight_per_local_action(latent_ckpt, tmp_path):
+    """`motiondiff-demo guided=<ckpt>`: the model list gains GuidedMotion, whose weights box reaches the sampler."""
+    from motiondiff.demo.models import DemoModels, generate
+    from motiondiff.errors import UsageError
+
+    _, ckpt = latent_ckpt
+    models = DemoModels(guided=ckpt)
+    assert models.choices[-1].key == "guided" and models.info("guided").kind == "guided"
+    out, samples = generate(models, "guided", CAPTION, tmp_path, seconds=1.0, steps=2, weights="2, 0.5")
+    assert [a["weight"] for a in out.info["local_actions"]] == [2.0, 0.5]
+    assert len(samples) == 1 and np.load(samples[0].npz)["joints"].shape == (20, 22, 3)
+    assert samples[0].bvh.is_file() and samples[0].mp4.is_file() and samples[0].html.is_file()
+    with pytest.raises(UsageError, match="one per action"):
+        generate(models, "guided", CAPTION, tmp_path, seconds=1.0, steps=2, weights="1")

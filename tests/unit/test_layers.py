@@ -13,12 +13,13 @@ import pytest
 SRC = Path(__file__).resolve().parents[2] / "src"
 PACKAGE = SRC / "motiondiff"
 
-# the top layers and who may import them: the CLI only itself; the research studies the CLI and themselves; the
-# pipelines the CLI, the studies and themselves
+# the top layers and who may import them: the CLI only itself; the web demo the CLI and itself; the research studies
+# the CLI and themselves; the pipelines the CLI, the studies, the demo and themselves
 ALLOWED_ABOVE = {
     "motiondiff.cli": ("motiondiff.cli",),
+    "motiondiff.demo": ("motiondiff.cli", "motiondiff.demo"),
     "motiondiff.studies": ("motiondiff.cli", "motiondiff.studies"),
-    "motiondiff.pipelines": ("motiondiff.cli", "motiondiff.studies", "motiondiff.pipelines"),
+    "motiondiff.pipelines": ("motiondiff.cli", "motiondiff.studies", "motiondiff.demo", "motiondiff.pipelines"),
 }
 
 
@@ -117,6 +118,8 @@ def test_no_import_cycles():
         ({"motiondiff.eval.metrics": {"motiondiff.cli.common"}}, "layers"),
         ({"motiondiff.pipelines.motion": {"motiondiff.studies.behaviour"}}, "layers"),
         ({"motiondiff.lit.generation": {"motiondiff.pipelines.motion"}}, "layers"),
+        ({"motiondiff.pipelines.output": {"motiondiff.demo.models"}}, "layers"),
+        ({"motiondiff.studies.behaviour": {"motiondiff.demo.app"}}, "layers"),
         (
             {
                 "motiondiff.data.representations.clip": {"motiondiff.eval.metrics"},

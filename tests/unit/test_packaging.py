@@ -45,5 +45,6 @@ def test_wheel_bundles_configs_models_data_and_commands(tmp_path):
         "motiondiff-edit",
         "motiondiff-evaluate",
         "motiondiff-prepare",
+        "motiondiff-demo",
     ):
         assert command in text

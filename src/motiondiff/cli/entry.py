@@ -1,6 +1,7 @@
-"""The commands: `motiondiff-train`, `-sample`, `-edit`, `-evaluate`, `-train-vae`, `-train-latent` (console scripts of
-an installed package) and the root scripts of a checkout (`python train.py ...`), one Hydra run each with the
-project's configs. Every user error is one `error: ...` line and exit code 2."""
+"""The commands: `motiondiff-train`, `-sample`, `-edit`, `-evaluate`, `-train-vae`, `-train-latent`, `-demo` (console
+scripts of an installed package) and the root scripts of a checkout (`python train.py ...`), one Hydra run each with
+the project's configs (the web demo: argparse options, see motiondiff.cli.demo). Every user error is one `error: ...`
+line and exit code 2."""
 
 from __future__ import annotations
 
@@ -54,3 +55,9 @@ def train_evaluator() -> None:
     from motiondiff.cli.train_evaluator import run
 
     _run("train_evaluator", run)
+
+
+def demo() -> None:
+    from motiondiff.cli.demo import main
+
+    main()

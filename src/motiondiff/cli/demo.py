@@ -1,0 +1,57 @@
+"""`motiondiff-demo`: the web demo on this machine (Gradio). Local only by default: 127.0.0.1, no share link.
+
+    motiondiff-demo                                  # http://127.0.0.1:7860
+    motiondiff-demo --port 8000 --host 0.0.0.0       # reachable from the network
+    motiondiff-demo guided=outputs/latent/<run>/checkpoints/last.ckpt   # also offer GuidedMotion
+
+Options are `--name value` or, like the other commands, `name=value`. `--share` asks Gradio for a public link (it
+needs internet and is off by default).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from motiondiff.scripting import quiet_tool_caches, user_errors
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="motiondiff-demo", description="The motiondiff web demo (Gradio).")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1: this machine only)")
+    p.add_argument("--port", type=int, default=7860, help="port (default 7860)")
+    p.add_argument("--share", action="store_true", help="a public gradio.live link (needs internet; off by default)")
+    p.add_argument("--guided", default=None, help="a GuidedMotion checkpoint (train_latent.py) to offer as well")
+    p.add_argument("--local-model", default="text", help="the text model that makes GuidedMotion's local actions")
+    p.add_argument("--model", default=None, help="the model shown first (default: text)")
+    p.add_argument("--seconds", type=float, default=4.0, help="the initial length in seconds")
+    p.add_argument("--steps", type=int, default=50, help="the initial sampler steps")
+    p.add_argument("--output-dir", default=None, help="where generated files go (default: a temporary folder)")
+    return p
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """``--name value`` and ``name=value`` (``local_model=`` as ``--local-model``) alike."""
+    args = []
+    for a in argv:
+        key, eq, value = a.partition("=")
+        if eq and not a.startswith("-"):
+            args += [f"--{key.replace('_', '-')}", value] if key != "share" else (["--share"] if _yes(value) else [])
+        else:
+            args.append(a)
+    return parser().parse_args(args)
+
+
+def _yes(value: str) -> bool:
+    return value.strip().lower() in ("1", "true", "yes", "on")
+
+
+@user_errors
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    quiet_tool_caches()
+    from motiondiff.demo import DemoModels, build_demo
+
+    models = DemoModels(guided=args.guided, local_model=args.local_model)
+    demo = build_demo(models, args.model, seconds=args.seconds, steps=args.steps, output_dir=args.output_dir)
+    demo.queue().launch(server_name=args.host, server_port=args.port, share=args.share)

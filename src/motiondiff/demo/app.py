@@ -1,0 +1,134 @@
+"""The Gradio page of `motiondiff-demo`: a prompt (or an action), length, guidance, seed and number of samples in;
+per sample the project's 3D viewer, an MP4 and BVH/NPZ downloads out.
+
+`build_demo(models)` returns the `gr.Blocks` app (library code: a script or a test can launch it without the CLI).
+A mistake the user can fix (empty text, a length the model cannot make, an unknown action) shows as a warning and
+a status line in the page, never a traceback; other failures show one line too and are logged with their traceback
+on the server.
+"""
+
+from __future__ import annotations
+
+import html
+import logging
+import tempfile
+from pathlib import Path
+
+import gradio as gr
+
+from motiondiff.demo.models import GLB_NOTE, MAX_SAMPLES, DemoModels, Sample, generate
+from motiondiff.errors import UsageError
+
+log = logging.getLogger(__name__)
+VIEWER_HEIGHT = 600  # px; the viewer page fills it (plot and play bar)
+
+
+def viewer_iframe(page: Path, title: str) -> str:
+    """The self-contained HTML viewer in an iframe (``srcdoc``: nothing is served or fetched)."""
+    doc = html.escape(page.read_text(encoding="utf-8"), quote=True)
+    return (f'<iframe class="motion-viewer" title="3D viewer: {html.escape(title, quote=True)}" srcdoc="{doc}" '
+            f'style="width:100%;height:{VIEWER_HEIGHT}px;border:0" loading="eager"></iframe>')  # fmt: skip
+
+
+def _hidden_slots() -> list:
+    return [gr.update(visible=False), gr.update(value=""), gr.update(value=""), None, None] * MAX_SAMPLES
+
+
+def _slot_updates(samples: list[Sample]) -> list:
+    updates = []
+    for i in range(MAX_SAMPLES):
+        if i < len(samples):
+            s = samples[i]
+            updates += [gr.update(visible=True), gr.update(value=f"**{s.title}**"),
+                        gr.update(value=viewer_iframe(s.html, s.title)), str(s.mp4), [str(s.bvh), str(s.npz)]]  # fmt: skip
+        else:
+            updates += [gr.update(visible=False), gr.update(value=""), gr.update(value=""), None, None]
+    return updates
+
+
+def build_demo(
+    models: DemoModels,
+    default: str | None = None,
+    *,
+    seconds: float = 4.0,
+    steps: int = 50,
+    output_dir: str | Path | None = None,
+) -> gr.Blocks:
+    """The demo page for ``models``; ``default`` the model shown first (the first choice when None), loaded now so
+    the page opens with its settings; ``seconds``/``steps`` the initial length and sampler steps; ``output_dir``
+    where each request's files go (a temporary folder when None)."""
+    default = default or models.choices[0].key
+    first = models.info(default)
+    root = Path(output_dir) if output_dir else Path(tempfile.mkdtemp(prefix="motiondiff-demo-"))
+
+    def on_model(key):
+        info = models.info(key)
+        is_action = info.kind == "action"
+        limit = f"up to {info.max_seconds:g} s"
+        return (gr.update(visible=not is_action),
+                gr.update(visible=is_action, choices=info.actions, value=info.actions[0] if info.actions else None),
+                gr.update(visible=info.kind == "guided"),
+                gr.update(maximum=info.max_seconds, value=min(info.max_seconds, seconds), info=limit),
+                gr.update(value=info.default_guidance))  # fmt: skip
+
+    def on_generate(key, text, action, secs, guidance, seed, count, n_steps, weights, progress=gr.Progress()):  # noqa: B008 (Gradio's progress hook)
+        kind = models.info(key).kind
+        prompt = action if kind == "action" else text
+        progress(0.1, desc="sampling")
+        try:
+            folder = Path(tempfile.mkdtemp(prefix="run-", dir=root))
+            out, samples = generate(models, key, prompt, folder, seconds=secs, guidance=guidance, seed=seed,
+                                    num_samples=count, steps=n_steps, weights=weights)  # fmt: skip
+        except UsageError as err:
+            gr.Warning(str(err))
+            return [f"**Please fix:** {err}", *_hidden_slots()]
+        except Exception as err:  # the page shows one line; the server log keeps the traceback
+            log.exception("generation failed")
+            return [f"**Generation failed:** {type(err).__name__}: {err}", *_hidden_slots()]
+        settings = ", ".join(f"{k} {out.info[k]}" for k in ("sampler", "steps", "guidance", "seed") if k in out.info)
+        local = out.info.get("local_actions")
+        if local:
+            settings += "; local actions: " + ", ".join(f"{a['text']} (weight {a['weight']:g})" for a in local)
+        return [f"Generated {len(samples)} motion(s) with **{key}** ({settings}). {GLB_NOTE}", *_slot_updates(samples)]
+
+    with gr.Blocks(title="motiondiff demo") as demo:
+        gr.Markdown("# motiondiff: text and action to human motion\nDescribe a motion (or pick an action), then "
+                    "**Generate**. Each sample shows in a 3D viewer (drag to turn, play/pause below it) and as a "
+                    "video, with BVH and NPZ downloads.")  # fmt: skip
+        with gr.Row():
+            with gr.Column(scale=3):
+                model = gr.Dropdown([(c.label, c.key) for c in models.choices], value=default, label="model")
+                text = gr.Textbox(label="prompt", value="a person walks forward", lines=2, elem_id="prompt",
+                                  visible=first.kind != "action",
+                                  placeholder="a person walks forward, then waves both hands")  # fmt: skip
+                action = gr.Dropdown(first.actions, value=first.actions[0] if first.actions else None, label="action",
+                                     visible=first.kind == "action", elem_id="action")  # fmt: skip
+                weights = gr.Textbox(label="local action weights (GuidedMotion)", visible=first.kind == "guided",
+                                     placeholder="one per action of the caption, e.g. 2, 0.5 (empty: 1 each)")  # fmt: skip
+            with gr.Column(scale=2):
+                secs = gr.Slider(0.5, first.max_seconds, value=min(seconds, first.max_seconds), step=0.05,
+                                 label="seconds", info=f"up to {first.max_seconds:g} s")  # fmt: skip
+                guidance = gr.Slider(0.0, 15.0, value=first.default_guidance, step=0.1, label="guidance",
+                                     info="classifier-free guidance scale (the model's default at first)")  # fmt: skip
+                with gr.Row():
+                    seed = gr.Number(0, precision=0, label="seed", minimum=0)
+                    count = gr.Slider(1, MAX_SAMPLES, value=1, step=1, label="samples")
+                with gr.Accordion("advanced", open=False):
+                    n_steps = gr.Slider(1, 1000, value=steps, step=1, label="sampler steps (DDIM)", elem_id="steps")
+        button = gr.Button("Generate", variant="primary", elem_id="generate")
+        status = gr.Markdown(GLB_NOTE, elem_id="status")
+        slots = []
+        for i in range(MAX_SAMPLES):
+            with gr.Column(visible=False, elem_id=f"sample-{i}") as column:
+                title = gr.Markdown()
+                viewer = gr.HTML(elem_id=f"viewer-{i}")
+                with gr.Row():
+                    video = gr.Video(label="video", elem_id=f"video-{i}", interactive=False)
+                    files = gr.File(label="downloads (BVH, NPZ)", file_count="multiple", elem_id=f"files-{i}",
+                                    interactive=False)  # fmt: skip
+            slots += [column, title, viewer, video, files]
+        model.change(on_model, model, [text, action, weights, secs, guidance])
+        inputs = [model, text, action, secs, guidance, seed, count, n_steps, weights]
+        button.click(on_generate, inputs, [status, *slots], concurrency_limit=1)
+        text.submit(on_generate, inputs, [status, *slots], concurrency_limit=1)
+    return demo

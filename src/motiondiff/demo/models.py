@@ -1,0 +1,175 @@
+"""The web demo's models and what one generation writes, without any web code (so it is testable on its own).
+
+`DemoModels` offers the released models (text, action, and any other release in checkpoints/models) and, when a
+GuidedMotion checkpoint is given, GuidedMotion; each pipeline is loaded on first use and kept, so a page that
+generates again (or switches back to a model) does not load it twice. `generate` runs one request through the public
+pipelines (`motiondiff.pipelines`) and writes per sample the files the page shows and offers: the self-contained HTML
+viewer, an MP4, a BVH and an NPZ (joints, features and fps in one file). Bad input raises `UsageError`.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from motiondiff.errors import UsageError
+from motiondiff.paths import SHIPPED_MODELS
+from motiondiff.pipelines import GuidedMotionPipeline, MotionOutput, MotionPipeline
+from motiondiff.pipelines.motion import MODELS_DIR
+
+MAX_SAMPLES = 4  # samples per request: the page has this many result slots
+GLB_NOTE = "GLB: not available in this install (no GLB exporter; it needs Blender's bpy). BVH and NPZ are offered."
+
+
+@dataclass(frozen=True)
+class ModelChoice:
+    """One entry of the page's model list: ``key`` its value, ``source`` a released name or a checkpoint path."""
+
+    key: str
+    label: str
+    source: str
+    guided: bool = False
+
+
+@dataclass
+class ModelInfo:
+    """What the page adapts to: the condition ("text", "action" or "guided"), the action names, the length range."""
+
+    kind: str
+    max_seconds: float
+    default_guidance: float
+    actions: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Sample:
+    """One generated motion's files and its caption line for the page."""
+
+    index: int
+    title: str
+    html: Path
+    mp4: Path
+    bvh: Path
+    npz: Path
+
+
+def released_choices() -> list[ModelChoice]:
+    """The released models: the "text" and "action" aliases first, then other releases in checkpoints/models."""
+    choices = [ModelChoice(k, f"{k} (released: {p.stem})", k) for k, p in SHIPPED_MODELS.items() if p.is_file()]
+    aliased = {p.stem for p in SHIPPED_MODELS.values()}
+    for path in sorted(MODELS_DIR.glob("*.safetensors")):
+        if path.stem not in aliased:
+            choices.append(ModelChoice(path.stem, f"{path.stem} (released)", path.stem))
+    return choices
+
+
+class DemoModels:
+    """The models the demo offers, each loaded once (thread-safe: Gradio runs handlers in worker threads)."""
+
+    def __init__(self, guided: str | Path | None = None, local_model: str = "text", device: str = "cpu"):
+        self.choices = released_choices()
+        if guided is not None:
+            path = Path(guided)
+            if not path.is_file():
+                raise UsageError(f"no GuidedMotion checkpoint at {path}: give guided=<the .ckpt train_latent.py wrote>")
+            self.choices.append(ModelChoice("guided", f"GuidedMotion ({path.name})", str(path), guided=True))
+        self.local_model, self.device = local_model, device
+        self._loaded: dict[str, MotionPipeline | GuidedMotionPipeline] = {}
+        self._lock = threading.Lock()
+
+    def choice(self, key: str) -> ModelChoice:
+        for c in self.choices:
+            if c.key == key:
+                return c
+        raise UsageError(f"unknown model {key!r}: choose one of {', '.join(c.key for c in self.choices)}")
+
+    def get(self, key: str) -> MotionPipeline | GuidedMotionPipeline:
+        """The pipeline of model ``key``, loaded on the first call and cached."""
+        choice = self.choice(key)
+        with self._lock:
+            if key not in self._loaded:
+                if choice.guided:
+                    pipe = GuidedMotionPipeline.from_pretrained(choice.source, self.local_model, self.device)
+                else:
+                    pipe = MotionPipeline.from_pretrained(choice.source, self.device)
+                self._loaded[key] = pipe
+            return self._loaded[key]
+
+    def info(self, key: str) -> ModelInfo:
+        pipe = self.get(key)
+        if isinstance(pipe, GuidedMotionPipeline):
+            decoder = pipe.latent.decoder.hparams
+            guidance = float((pipe.latent.hparams.sampling or {}).get("guidance", 7.5))  # the latent model's default
+            return ModelInfo("guided", int(decoder.max_frames) / pipe.fps, guidance)
+        return ModelInfo(pipe.condition_kind, pipe.max_seconds, float(pipe.model.default_guidance), pipe.actions)
+
+
+def parse_weights(text: str | None) -> list[float] | None:
+    """GuidedMotion's local-action weights from the page: "2, 0.5" (one per local action); empty: None (1 each)."""
+    if text is None or not str(text).strip():
+        return None
+    try:
+        return [float(w) for w in str(text).replace(";", ",").split(",") if w.strip()]
+    except ValueError:
+        raise UsageError(
+            f"local action weights must be numbers separated by commas, e.g. 2, 0.5; got {text!r}"
+        ) from None
+
+
+def write_npz(path: Path, joints: np.ndarray, features: np.ndarray, fps: float) -> Path:
+    """One motion in one file: joints (frames, J, 3) in metres, y up; the model's features; fps."""
+    np.savez(path, joints=np.asarray(joints, np.float32), features=np.asarray(features, np.float32), fps=float(fps))
+    return path
+
+
+def generate(
+    models: DemoModels,
+    key: str,
+    prompt: str | None,
+    out_dir: str | Path,
+    *,
+    seconds: float,
+    guidance: float | None = None,
+    seed: int = 0,
+    num_samples: int = 1,
+    steps: int | None = None,
+    weights: str | None = None,
+) -> tuple[MotionOutput, list[Sample]]:
+    """Generate ``num_samples`` motions of ``prompt`` (a text, or an action model's action name) with model ``key``
+    and write each one's viewer, MP4, BVH and NPZ under ``out_dir``."""
+    num_samples = _whole(num_samples, "number of samples", 1, MAX_SAMPLES)
+    seed = _whole(seed, "seed", 0, 2**63 - 1)
+    steps = None if steps in (None, "") else _whole(steps, "steps", 1, 10_000)
+    pipe = models.get(key)
+    if isinstance(pipe, GuidedMotionPipeline):
+        level_steps = None if steps is None else (steps, steps, steps)
+        out = pipe(prompt, seconds=float(seconds), num_samples=num_samples, guidance=guidance, seed=seed,
+                   level_steps=level_steps, local_weights=parse_weights(weights))  # fmt: skip
+    else:
+        if pipe.condition_kind == "action" and (prompt is None or not str(prompt).strip()):
+            raise UsageError(f"choose an action: one of {', '.join(pipe.actions)}")
+        out = pipe(prompt, seconds=float(seconds), num_samples=num_samples, guidance=guidance, steps=steps, seed=seed)
+    out_dir = Path(out_dir)
+    rows = out.save(out_dir, formats=["bvh", "mp4", "html"])
+    samples = []
+    for row in rows:
+        i = row["index"]
+        exports = row["exports"]
+        npz = write_npz(Path(exports["bvh"]).with_suffix(".npz"), out.joints[i], out.features[i], out.fps)
+        title = f"sample {i + 1}: {out.prompts[i] or 'unconditioned'}, {out.seconds(i):.1f} s at {out.fps:g} fps"
+        samples.append(Sample(i, title, Path(exports["html"]), Path(exports["mp4"]), Path(exports["bvh"]), npz))
+    return out, samples
+
+
+def _whole(value, name: str, low: int, high: int) -> int:
+    """A whole number from the page (Gradio numbers arrive as floats)."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise UsageError(f"{name} must be a whole number, got {value!r}") from None
+    if not number.is_integer() or not low <= number <= high:
+        raise UsageError(f"{name} must be a whole number in {low}..{high}, got {value!r}")
+    return int(number)

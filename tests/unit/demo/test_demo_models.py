@@ -1,0 +1,81 @@
+"""The demo's model list, its input checks and what one generation writes (no browser: tests/e2e/test_demo.py
+drives the page). Input checks run before any model is loaded; one real generation uses the shipped action model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motiondiff.demo.models import DemoModels, generate, parse_weights, released_choices
+from motiondiff.errors import UsageError
+
+
+def test_released_models_are_offered_and_guidedmotion_only_with_a_checkpoint(tmp_path):
+    keys = [c.key for c in released_choices()]
+    assert keys[:2] == ["text", "action"] and "bandai_text_cpu" in keys  # other releases, not the aliased stems
+    assert "bandai_mini_text_cpu" not in keys and "bandai_action_cpu" not in keys
+    assert "guided" not in [c.key for c in DemoModels().choices]
+    with pytest.raises(UsageError, match="no GuidedMotion checkpoint"):
+        DemoModels(guided=tmp_path / "missing.ckpt")
+    ckpt = tmp_path / "last.ckpt"
+    ckpt.write_bytes(b"")  # listed, not loaded: a model loads when the page first uses it
+    models = DemoModels(guided=ckpt)
+    assert models.choice("guided").guided and models.choice("guided").source == str(ckpt)
+    with pytest.raises(UsageError, match="unknown model 'nope'"):
+        models.choice("nope")
+
+
+@pytest.mark.parametrize(
+    "text, expect", [(None, None), ("  ", None), ("2, 0.5", [2.0, 0.5]), ("1;0", [1.0, 0.0]), ("3", [3.0])]
+)
+def test_local_action_weights(text, expect):
+    assert parse_weights(text) == expect
+
+
+def test_bad_weights_are_a_usage_error():
+    with pytest.raises(UsageError, match="numbers separated by commas"):
+        parse_weights("2, lots")
+
+
+@pytest.mark.parametrize(
+    "field, value, message",
+    [("num_samples", 5, "number of samples must be a whole number in 1..4"), ("num_samples", 1.5, "whole number"),
+     ("seed", -1, "seed must be"), ("steps", 0, "steps must be"), ("steps", "x", "steps must be a whole number")],
+)  # fmt: skip
+def test_page_numbers_are_checked_before_any_model_loads(tmp_path, field, value, message):
+    models = DemoModels()
+    kwargs = {"seconds": 2.0, "num_samples": 1, "seed": 0, "steps": 5, field: value}
+    with pytest.raises(UsageError, match=message):
+        generate(models, "text", "a person walks", tmp_path, **kwargs)
+    assert not models._loaded
+
+
+@pytest.fixture(scope="module")
+def action_models():
+    models = DemoModels()
+    assert models.info("action").kind == "action"
+    return models
+
+
+def test_action_model_generates_viewer_video_bvh_and_npz(action_models, tmp_path):
+    info = action_models.info("action")
+    assert "walk" in info.actions and info.max_seconds == 6.0
+    out, samples = generate(action_models, "action", "walk", tmp_path, seconds=0.5, num_samples=2, steps=2, seed=3)
+    assert [s.index for s in samples] == [0, 1] and out.prompts == ["walk", "walk"]
+    for s in samples:
+        assert s.html.read_text().count("Plotly.newPlot") >= 1 and s.mp4.stat().st_size > 1000
+        assert s.bvh.read_text().startswith("HIERARCHY")
+        npz = np.load(s.npz)
+        np.testing.assert_array_equal(npz["joints"], out.joints[s.index])
+        np.testing.assert_array_equal(npz["features"], out.features[s.index])
+        assert float(npz["fps"]) == out.fps == 20.0 and npz["joints"].shape == (10, 22, 3)
+    assert action_models.get("action") is action_models.get("action")  # loaded once
+
+
+@pytest.mark.parametrize(
+    "prompt, seconds, message",
+    [("", 2.0, "choose an action"), ("fly", 2.0, "fly"), ("walk", 60.0, "longer than this model's maximum")],
+)
+def test_action_model_bad_input_is_a_usage_error(action_models, tmp_path, prompt, seconds, message):
+    with pytest.raises(UsageError, match=message):
+        generate(action_models, "action", prompt, tmp_path, seconds=seconds, steps=2)

@@ -1,0 +1,32 @@
+"""The page's handlers without a browser (tests/e2e/test_demo.py drives the real page): picking the action model
+swaps the prompt box for its action list and sets its length limit and guidance; an unknown action is a status line
+with the fix, not an exception."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("gradio", reason="gradio is not installed: `pip install -e '.[demo]'`")
+
+
+@pytest.fixture(scope="module")
+def handlers(tmp_path_factory):
+    from motiondiff.demo import DemoModels, build_demo
+
+    demo = build_demo(DemoModels(), "action", seconds=1.0, steps=2, output_dir=tmp_path_factory.mktemp("page"))
+    return {f.name: f.fn for f in demo.fns.values()}
+
+
+def test_the_action_model_shows_its_actions_instead_of_the_prompt(handlers):
+    text, action, weights, seconds, guidance = handlers["on_model"]("action")
+    assert text["visible"] is False and action["visible"] is True and weights["visible"] is False
+    assert "walk" in action["choices"] and action["value"] == "bow"
+    assert seconds["maximum"] == 6.0 and guidance["value"] == 2.0  # the action model's limit and default
+
+
+def test_an_unknown_action_is_a_status_line_with_the_fix(handlers):
+    status, column, *_ = handlers["on_generate"](
+        "action", "", "fly", 1.0, 2.0, 0, 1, 2, "", progress=lambda *a, **k: None
+    )
+    assert status.startswith("**Please fix:** unknown action 'fly'") and "walk" in status
+    assert column["visible"] is False
