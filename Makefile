@@ -12,7 +12,7 @@ export HF_HOME := $(CURDIR)/.cache/huggingface
 export HF_HUB_OFFLINE := 1
 export TRANSFORMERS_OFFLINE := 1
 
-.PHONY: setup train test bench lint format data data-full lock clean guided-compare notebooks
+.PHONY: setup train test bench lint format data data-full lock clean guided-compare notebooks dashboard
 
 # Training and the benchmark run with tcmalloc where it is installed (`make allocator` installs Debian's as root):
 # glibc returns every freed tensor above 32 MB to the kernel and page-faults it back in on the next step, which made
@@ -52,12 +52,12 @@ define debian_package
 	else echo "note: no $(2) and no root apt-get; $(4)"; fi
 endef
 
-# The HTML viewer's end-to-end test screenshots it in headless Chromium, and the web demo's test drives the page with
-# Selenium through chromedriver (each test skips with the reason without them).
+# The HTML viewer's and the dashboard's end-to-end tests screenshot them in headless Chromium, and the web demo's
+# test drives the page with Selenium through chromedriver (each test skips with the reason without them).
 .PHONY: browser
 browser:
 	$(call debian_package,command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
-		command -v google-chrome >/dev/null 2>&1,chromium,for the HTML viewer test,the HTML viewer screenshot test will skip)
+		command -v google-chrome >/dev/null 2>&1,chromium,for the browser tests,the browser screenshot tests will skip)
 	$(call debian_package,command -v chromedriver >/dev/null 2>&1,chromium-driver,for the web demo test,the web demo browser test will skip)
 
 # tcmalloc for training (above).
@@ -100,6 +100,18 @@ guided-compare: setup allocator
 	mdm=$$(ls $(GC)/mdm/checkpoints/best-fid-*.ckpt 2>/dev/null | head -1); \
 	$(PY) -m motiondiff.studies.guided_compare latent=$(GC)/latent/checkpoints/last.ckpt \
 		mdm=$${mdm:-$(GC)/mdm/checkpoints/last.ckpt} replications=$(GC_REPLICATIONS) out=$(GC_OUT)
+
+# TensorBoard on a training run: RUN=<run folder>, default the newest outputs/train/* trained with logger=tensorboard;
+# PORT=<port> if 6006 is taken. A W&B run has its own offline viewer in the terminal: wandb leet <run>/wandb
+RUN ?= $(shell ls -d outputs/train/*/tensorboard 2>/dev/null | sort | tail -1 | xargs -r dirname)
+PORT ?= 6006
+dashboard: setup
+	@test -n "$(RUN)" || { echo "error: no run in outputs/train has TensorBoard events: train with logger=tensorboard, \
+	or give RUN=<run folder> (a W&B run: $(VENV)/bin/wandb leet <run>/wandb)"; exit 2; }
+	@find "$(RUN)" -name 'events.out.tfevents.*' 2>/dev/null | grep -q . || { echo "error: no TensorBoard events in \
+	$(RUN): train with logger=tensorboard (a W&B run: $(VENV)/bin/wandb leet $(RUN:/=)/wandb)"; exit 2; }
+	@echo "TensorBoard on $(RUN:/=): http://localhost:$(PORT)/ (Ctrl-C stops it)"
+	@$(VENV)/bin/tensorboard --logdir "$(RUN)" --port $(PORT)
 
 lint: setup
 	$(VENV)/bin/ruff check src tests bench

@@ -206,6 +206,8 @@ CASES = [
     Case("unknown_representation", train("representation=quaternions"), UsageError, "must be one of hml263"),
     Case("representation_of_another_skeleton", train("representation=kit251"), RepresentationError, "use 'hml263'"),
     Case("resume_checkpoint_missing", train("ckpt_path=/no/such/last.ckpt"), UsageError, "pass the last.ckpt of the run"),
+    Case("sample_video_count_zero", train("condition=none", "callbacks.evaluation.videos.count=0"), UsageError, "videos.count=0: must be an integer from 1 to 8"),
+    Case("sample_video_of_an_unknown_action", train("condition=action", "callbacks.evaluation.videos.actions=[fly]"), UsageError, "no action 'fly'; its actions are"),
     # files
     Case("output_folder_inside_a_file", lambda tmp: (write("outputs", "x")(tmp), write("src/a.bvh", BVH)(tmp), prepare("bvh", "--src", "{tmp}/src", "--out", "{tmp}/outputs/new")(tmp)),
          UsageError, "outputs"),

@@ -1,7 +1,8 @@
 """Multi-process training with Lightning DDP (`trainer=ddp`): two CPU processes over gloo, each with half of the
 global batch, against one process with the whole batch. Both start from the same weights (same seed); their per-step
 noise draws differ, so the curves are compared on averages, not step by step. The generation evaluation and the
-best-FID checkpoint run too (8 clips, DDIM-5, to keep the test short)."""
+best-FID checkpoint run too (8 clips, DDIM-5, to keep the test short), and rank 0 alone renders one short sample
+video per evaluation."""
 
 from __future__ import annotations
 
@@ -13,7 +14,9 @@ from cli_helpers import TINY, run_cli
 
 STEPS = 64  # four epochs of the embedded data at a global batch of 16 (251 clips / 16 = 16 steps each)
 COMMON = [*TINY, f"trainer.max_steps={STEPS}", f"checkpoint_every={STEPS}", "optim.lr=2e-3",
-          "trainer.check_val_every_n_epoch=1", "callbacks.evaluation.num_clips=8", "callbacks.evaluation.steps=5"]  # fmt: skip
+          "trainer.check_val_every_n_epoch=1", "callbacks.evaluation.num_clips=8", "callbacks.evaluation.steps=5",
+          "callbacks.evaluation.videos.prompts=[a person walks forward]",
+          "callbacks.evaluation.videos.seconds=1"]  # fmt: skip
 
 
 def metrics(workdir: Path) -> dict[str, dict[int, float]]:
@@ -50,3 +53,4 @@ def test_two_process_ddp_follows_the_single_process_curve_at_the_same_global_bat
     assert len(list((run_dir / "checkpoints").glob("best-fid-*.ckpt"))) == 1
     ckpt = run_dir / "checkpoints" / "last.ckpt"
     assert ckpt.is_file() and len(list((ddp / "outputs" / "train").glob("*/run.json"))) == 1
+    assert len(list(run_dir.glob("videos/step*/*.gif"))) == STEPS // 16  # one per evaluation, from rank 0 only

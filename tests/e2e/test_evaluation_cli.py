@@ -11,7 +11,7 @@ from cli_helpers import REPO, TINY, run_cli
 from fixtures.in_process import run_entry, user_error
 
 EVALUATORS = REPO / "checkpoints" / "evaluators" / "bandai_mini"
-FAST_EVAL = ["callbacks.evaluation.num_clips=12", "callbacks.evaluation.steps=4"]
+FAST_EVAL = ["callbacks.evaluation.num_clips=12", "callbacks.evaluation.steps=4", "callbacks.evaluation.videos=null"]
 
 pytestmark = pytest.mark.skipif(
     not (EVALUATORS / "text_motion.safetensors").is_file(),

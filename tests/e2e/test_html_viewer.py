@@ -4,37 +4,19 @@ colours and differ between the frames. Skips with the reason when no Chromium/Ch
 
 from __future__ import annotations
 
-import os
 import re
-import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
-from PIL import Image
+from browser_helpers import pixels_near, screenshot
 
 from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.export import export_html
 from motiondiff.skeleton import SMPL22
 
-BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 LEFT_BLUE, RIGHT_RED = (0x1F, 0x77, 0xB4), (0xD6, 0x27, 0x28)  # the viewer's limb colours
-
-
-def find_browser() -> str | None:
-    if Path("/usr/bin/chromium").is_file():
-        return "/usr/bin/chromium"
-    return next((path for name in BROWSERS if (path := shutil.which(name))), None)
-
-
-@pytest.fixture(scope="module")
-def browser() -> str:
-    path = find_browser()
-    if path is None:
-        pytest.skip(f"no headless browser found (tried /usr/bin/chromium and {', '.join(BROWSERS)}); `make browser`")
-    return path
 
 
 @pytest.fixture(scope="module")
@@ -48,23 +30,6 @@ def viewer(tmp_path_factory) -> tuple[Path, int]:
     assert joints[raised, wrists, 1].min() > joints[0, wrists, 1].max() + 0.5  # the clip really raises the hands
     path = export_html(tmp_path_factory.mktemp("viewer") / "raise.html", joints, SMPL22, 20, title="raise both hands")
     return path, raised
-
-
-def screenshot(browser: str, url: str, out: Path) -> np.ndarray:
-    """Headless screenshot (800x600). WebGL (plotly's 3D) runs on the software SwiftShader GL."""
-    args = [browser, "--headless", "--hide-scrollbars", "--no-first-run", "--mute-audio",
-            "--use-angle=swiftshader", "--enable-unsafe-swiftshader", f"--user-data-dir={out.parent / 'profile'}",
-            f"--screenshot={out}", "--window-size=800,600", "--virtual-time-budget=15000", url]  # fmt: skip
-    if os.geteuid() == 0:
-        args.insert(1, "--no-sandbox")  # Chromium refuses to run as root with its sandbox
-    proc = subprocess.run(args, capture_output=True, text=True, timeout=180)
-    assert proc.returncode == 0 and out.is_file(), f"{browser} failed ({proc.returncode}):\n{proc.stderr[-2000:]}"
-    with Image.open(out) as image:
-        return np.asarray(image.convert("RGB"), dtype=np.int16)
-
-
-def pixels_near(image: np.ndarray, colour: tuple[int, int, int], tol: int = 40) -> int:
-    return int((np.abs(image - np.array(colour)).max(axis=-1) <= tol).sum())
 
 
 def test_viewer_is_self_contained(viewer):

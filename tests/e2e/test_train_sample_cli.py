@@ -124,10 +124,12 @@ def test_kill_and_resume_ends_with_the_uninterrupted_weights(tmp_path):
 
     every, total = 3, 36
     common = [*TINY, "condition=none", "trainer.check_val_every_n_epoch=3", "callbacks.evaluation.num_clips=8",
-              "callbacks.evaluation.steps=3", f"checkpoint_every={every}"]  # fmt: skip
+              "callbacks.evaluation.steps=3", f"checkpoint_every={every}", "callbacks.evaluation.videos.count=1",
+              "callbacks.evaluation.videos.seconds=1"]  # one short unconditioned video per evaluation  # fmt: skip
     reference, killed = tmp_path / "reference", tmp_path / "killed"
     reference.mkdir(), killed.mkdir()
     run_cli("train.py", *common, f"trainer.max_steps={total}", env_dir=reference)
+    assert list((reference / "outputs").glob("train/*/videos/step*/0_unconditioned.gif"))
     env = {**os.environ, "MOTIONDIFF_OUTPUT_DIR": str(killed / "outputs"), "MOTIONDIFF_CACHE_DIR": str(killed / "c"),
            "WANDB_MODE": "offline"}  # fmt: skip
     cmd = [sys.executable, str(REPO / "train.py"), *common, "trainer.max_steps=100000",

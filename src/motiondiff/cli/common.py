@@ -24,16 +24,30 @@ def trainer_parts(cfg: DictConfig) -> tuple[list, list]:
     """(loggers, callbacks) instantiated from ``cfg.logger`` and ``cfg.callbacks`` (null entries left out).
 
     ``logger=none`` is a supported choice, but Lightning's LearningRateMonitor refuses a Trainer without a logger:
-    it is dropped then (there is nowhere to log the rate to), with a note."""
-    from hydra.utils import instantiate
+    it is dropped then (there is nowhere to log the rate to), with a note. A user error a constructor raises (e.g. a
+    bad ``callbacks.evaluation.videos`` setting) is reported as itself, not inside Hydra's InstantiationException."""
     from lightning.pytorch.callbacks import LearningRateMonitor
 
-    loggers = [instantiate(c) for c in (cfg.get("logger") or {}).values() if c is not None]
-    callbacks = [instantiate(c) for c in (cfg.get("callbacks") or {}).values() if c is not None]
+    loggers = [_instantiate(c) for c in (cfg.get("logger") or {}).values() if c is not None]
+    callbacks = [_instantiate(c) for c in (cfg.get("callbacks") or {}).values() if c is not None]
     if not loggers and any(isinstance(c, LearningRateMonitor) for c in callbacks):
         callbacks = [c for c in callbacks if not isinstance(c, LearningRateMonitor)]
         logging.getLogger(__name__).info("logger=none: the learning-rate monitor is left out (nothing to log to)")
     return loggers, callbacks
+
+
+def _instantiate(cfg):
+    from hydra.errors import InstantiationException
+    from hydra.utils import instantiate
+
+    from motiondiff.scripting import USER_ERRORS
+
+    try:
+        return instantiate(cfg)
+    except InstantiationException as err:
+        if isinstance(err.__cause__, USER_ERRORS):
+            raise err.__cause__ from None
+        raise
 
 
 def sampling_steps(cfg: DictConfig, module) -> int | None:

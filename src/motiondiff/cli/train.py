@@ -121,6 +121,16 @@ def evaluation_callbacks(callbacks: list) -> list:
     return [c for c in callbacks if c not in missing and c not in needs_fid]
 
 
+def check_sample_videos(callbacks: list, module: MotionDiffusionModule) -> None:
+    """The evaluation's sample videos (``callbacks.evaluation.videos``) ask for prompts or action names this model
+    has: a wrong one fails now, before anything is written, not at the first evaluation."""
+    from motiondiff.eval.callbacks import GenerationEvaluation
+
+    for callback in callbacks:
+        if isinstance(callback, GenerationEvaluation) and callback.videos is not None:
+            callback.videos.conditions(module)
+
+
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_TRAIN)  # types and ranges before any work
     L.seed_everything(cfg.seed, workers=True)
@@ -134,6 +144,7 @@ def run(cfg: DictConfig) -> Path:
         module.set_text_table(*build_text_table(cfg, dm))
     loggers, callbacks = trainer_parts(cfg)
     callbacks = evaluation_callbacks(callbacks)
+    check_sample_videos(callbacks, module)
     if cfg.ema:
         from lightning.pytorch.callbacks import EMAWeightAveraging
 

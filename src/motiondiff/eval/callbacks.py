@@ -6,6 +6,8 @@ them with the dataset's evaluators and logs `val/fid`, `val/r_precision_top{1,2,
 `val/diversity` (text), `val/accuracy` (action) or `val/kid`, `val/precision`, `val/recall` (unconditioned).
 Text models on labelled data also sample once from each clip's label caption and log `val/action_accuracy` (does
 the motion do the action its caption names, by the dataset's action classifier).
+With `videos` set, each evaluation also logs a few generated motions as GIFs to the dashboards (W&B, TensorBoard;
+motiondiff.eval.sample_videos).
 A `ModelCheckpoint(monitor="val/fid", mode="min", save_top_k=1)` placed after it keeps the best-FID checkpoint
 (`callbacks.best_fid.monitor=val/action_accuracy callbacks.best_fid.mode=max` keeps the best action accuracy).
 
@@ -24,6 +26,7 @@ import numpy as np
 import torch
 
 from motiondiff.eval.protocol import EvalClips, Evaluators, action_accuracy, generate, replication_metrics
+from motiondiff.eval.sample_videos import SampleVideos
 
 log = logging.getLogger(__name__)
 
@@ -42,6 +45,7 @@ class GenerationEvaluation(L.Callback):
         seed: int = 0,
         precision: str = "32-true",
         action_accuracy: bool = True,
+        videos: dict | None = None,
     ):
         self.evaluator_dir = Path(evaluator_dir)
         self.every_n_epochs = every_n_epochs
@@ -49,6 +53,7 @@ class GenerationEvaluation(L.Callback):
         self.sampling = {"sampler": sampler, "steps": steps, "precision": precision}
         self.guidance, self.batch_size, self.seed = guidance, batch_size, seed
         self.action_accuracy = action_accuracy
+        self.videos = SampleVideos.from_config(videos, seed)  # None: no sample videos
         self.evaluators: Evaluators | None = None
         self._real: tuple[EvalClips, dict, list] | None = None
 
@@ -63,6 +68,8 @@ class GenerationEvaluation(L.Callback):
             log.info("evaluation samples with %s over all %d diffusion steps (asked %d)", self.sampling["sampler"],
                      num_steps, self.sampling["steps"])  # fmt: skip
             self.sampling["steps"] = num_steps
+        if self.videos is not None and self.available:
+            self.videos.conditions(pl_module)  # prompts or action names that do not fit the model fail before training
         if self.available and self.evaluators is None:
             self.evaluators = Evaluators.load(self.evaluator_dir, num_joints=pl_module.hparams.num_joints)
             self.evaluators.for_module(pl_module)
@@ -99,6 +106,8 @@ class GenerationEvaluation(L.Callback):
                                 guidance=guidance, **self.sampling)  # fmt: skip
             values["action_accuracy"] = action_accuracy(self.evaluators, self.evaluators.embed_motion(labelled),
                                                         clips.actions)  # fmt: skip
+        if self.videos is not None and trainer.is_global_zero:  # rank 0 logs; the others have no loggers to fill
+            self.videos.log(trainer, pl_module, guidance, self.sampling["precision"])
         pl_module.train(was_training)
         for name, value in values.items():
             pl_module.log(f"val/{name}", float(value), prog_bar=name == "fid", sync_dist=True)

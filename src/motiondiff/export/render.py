@@ -120,9 +120,16 @@ def title_at(title: Title, frame: int) -> str:
 
 
 def render_motion(
-    joints: np.ndarray, skeleton: Skeleton, path: str | Path, title: Title = "", fps: float = 20.0, dpi: int = 80
+    joints: np.ndarray,
+    skeleton: Skeleton,
+    path: str | Path,
+    title: Title = "",
+    fps: float = 20.0,
+    dpi: int = 80,
+    frame_step: int = 1,
 ) -> Path:
-    """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif)."""
+    """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif): a 4-inch square figure of ``4 * dpi``
+    pixels, every ``frame_step``-th frame (played at the motion's own speed)."""
     import logging
 
     import matplotlib
@@ -137,9 +144,11 @@ def render_motion(
         raise ValueError(f"cannot render to {path.name}: use a .mp4 or .gif file name")
     if not path.parent.is_dir():
         raise NotADirectoryError(f"cannot write {path}: the folder {path.parent} does not exist")
-    anim = stick_figure_animation(joints, skeleton, title, fps, dpi)
+    frame_step = max(1, int(frame_step))
+    anim = stick_figure_animation(joints, skeleton, title, fps, dpi, frame_step)
+    writer = _writer(suffix, fps / frame_step)
     try:
-        atomic_write(path, lambda tmp: anim.save(tmp, writer=_writer(suffix, fps), dpi=dpi), suffix=suffix)
+        atomic_write(path, lambda tmp: anim.save(tmp, writer=writer, dpi=dpi), suffix=suffix)
     finally:
         plt.close(anim._fig)
     return path

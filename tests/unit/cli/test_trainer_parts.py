@@ -34,3 +34,17 @@ def test_logger_none_drops_only_the_rate_monitor(entry, tmp_path):
     loggers, with_logger = trainer_parts(csv)
     assert isinstance(loggers[0], CSVLogger) and any(isinstance(c, LearningRateMonitor) for c in with_logger)
     assert len(with_logger) == len(callbacks) + 1
+
+
+def test_a_bad_callback_setting_is_one_user_error(tmp_path):
+    """Hydra wraps what a constructor raises in InstantiationException (a traceback); a UsageError comes out as
+    itself, so the command prints one line."""
+    from omegaconf import OmegaConf
+
+    from motiondiff.errors import UsageError
+
+    cfg = OmegaConf.create({"callbacks": {"evaluation": {
+        "_target_": "motiondiff.eval.callbacks.GenerationEvaluation", "evaluator_dir": str(tmp_path),
+        "videos": {"count": 0}}}})  # fmt: skip
+    with pytest.raises(UsageError, match=r"^callbacks\.evaluation\.videos\.count=0: must be an integer"):
+        trainer_parts(cfg)
