@@ -185,9 +185,9 @@ def refine_rotations(
     length per bone (offsets (J, 3), directions kept) that bring forward kinematics close to `positions` at every
     frame and joint (torch L-BFGS from the IK solution; the root stays at `root`).
 
-    Direction matching is exact for rigid bones, but generated joints change bone lengths from frame to frame (by
-    1-2 cm, at times 5 cm) and bend the pelvis and chest arrangement, and it passes each such error whole to every
-    joint below (a collar 5 cm off moves the whole arm). The fit spreads it over the chain instead, minimising the
+    Direction matching is exact for rigid bones, but generated joints change bone lengths from frame to frame and
+    bend the pelvis and chest arrangement (measurements: docs/editing.md), and it passes each such error whole to
+    every joint below (a misplaced collar moves the whole arm). The fit spreads it over the chain instead, minimising the
     mean of d^p over frames and joints (d: distance) for each p in `powers` in turn: least squares first, then
     higher powers, which approach the smallest worst-case distance. Returns (rotations, offsets)."""
     import torch

@@ -6,7 +6,7 @@ that jitters from frame to frame, as generated feet do, still counts as planted)
 when
 - its height is within CONTACT_HEIGHT_M (5 cm) of its own low level in the motion (its 5th height percentile: an
   ankle stands higher above the floor than a toe, and a generated floor need not be at y = 0), and
-- its horizontal speed (central difference) is below CONTACT_SPEED_M_S (0.5 m/s; a swinging foot moves at 1-5 m/s);
+- its horizontal speed (central difference) is below CONTACT_SPEED_M_S (0.5 m/s; a swinging foot is several times faster);
 contact runs separated by at most GAP_S (0.1 s) are merged into one.
 
 Each run pins its joint at one point, the run's mean position (the mean over the run's kept frames when it reaches
