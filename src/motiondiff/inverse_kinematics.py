@@ -32,10 +32,11 @@ from motiondiff.rotations import (
     qrot,
     qswing,
     qtwist_angle,
+    quat_to_matrix,
 )
 from motiondiff.skeleton import Skeleton
 
-__all__ = ["DEFAULT_TWIST_HALF_LIFE", "fit_rest_offsets", "solve_rotations"]
+__all__ = ["DEFAULT_TWIST_HALF_LIFE", "fit_rest_offsets", "refine_rotations", "solve_rotations"]
 
 # Frames (1 s at 20 fps) for a twist carried through a swing singularity to fade by half. Longer: smaller steps
 # (about 180 deg x (1 - 2^(-1/half_life)) per frame at worst); shorter: back to the untwisted solution sooner.
@@ -168,3 +169,64 @@ def _sibling_arrangement(bones: np.ndarray, template: np.ndarray, iterations: in
         pose = kabsch(np.broadcast_to(shape, bones.shape), bones)  # (N, 3, 3)
         shape = np.einsum("nji,nkj->ki", pose, bones) / len(bones)  # mean of R_t^T x_tk
     return shape @ kabsch(shape, template).T
+
+
+def refine_rotations(
+    positions: np.ndarray,
+    skeleton: Skeleton,
+    offsets: np.ndarray,
+    rotations: np.ndarray,
+    root: np.ndarray,
+    *,
+    powers: tuple[float, ...] = (2.0, 8.0, 32.0),
+    iterations: int = 150,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Polish `solve_rotations`'s answer for joints whose bones are not rigid: local rotations (N, J, 4) and one
+    length per bone (offsets (J, 3), directions kept) that bring forward kinematics close to `positions` at every
+    frame and joint (torch L-BFGS from the IK solution; the root stays at `root`).
+
+    Direction matching is exact for rigid bones, but generated joints change bone lengths from frame to frame and
+    bend the pelvis and chest arrangement (measurements: docs/editing.md), and it passes each such error whole to
+    every joint below (a misplaced collar moves the whole arm). The fit spreads it over the chain instead, minimising the
+    mean of d^p over frames and joints (d: distance) for each p in `powers` in turn: least squares first, then
+    higher powers, which approach the smallest worst-case distance. Returns (rotations, offsets)."""
+    import torch
+
+    from motiondiff.kinematics import forward_kinematics_torch
+    from motiondiff.torch_rotations import axis_angle_to_matrix
+
+    positions, offsets = _check_positions(positions, skeleton, offsets)
+    target = torch.as_tensor(positions)
+    base = torch.as_tensor(quat_to_matrix(np.asarray(rotations, dtype=np.float64)))
+    rest = torch.as_tensor(offsets[1:])
+    top = torch.as_tensor(np.asarray(root, dtype=np.float64))[:, None]
+    turn = torch.zeros(base.shape[:2] + (3,), dtype=torch.float64, requires_grad=True)  # axis-angle change per joint
+    stretch = torch.zeros(len(rest), dtype=torch.float64, requires_grad=True)  # log length factor per bone
+
+    def fk():
+        bones = (rest * torch.exp(stretch)[:, None]).expand(len(target), -1, -1)
+        local = base @ axis_angle_to_matrix(turn)
+        return forward_kinematics_torch(local, torch.cat([top, bones], dim=1), skeleton.parents)[0], local
+
+    def distance():
+        return torch.sqrt(((fk()[0] - target) ** 2).sum(-1) + 1e-18)
+
+    for power in powers:
+        with torch.no_grad():
+            scale = float(distance().max()) + 1e-9  # distances in units of the current worst: well scaled
+        optimizer = torch.optim.LBFGS([turn, stretch], max_iter=iterations, history_size=20,
+                                      line_search_fn="strong_wolfe", tolerance_grad=1e-12, tolerance_change=1e-15)  # fmt: skip
+
+        def closure(power=power, scale=scale, optimizer=optimizer):
+            optimizer.zero_grad()
+            loss = ((distance() / scale) ** power).mean()
+            loss.backward()
+            return loss
+
+        optimizer.step(closure)
+    with torch.no_grad():
+        local = fk()[1].numpy()
+        lengths = np.exp(stretch.numpy())
+    out = offsets.copy()
+    out[1:] *= lengths[:, None]
+    return qfix(qnormalize(matrix_to_quat(local))), out

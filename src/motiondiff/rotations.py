@@ -99,6 +99,21 @@ def matrix_to_quat(m: np.ndarray) -> np.ndarray:
     return xyzw[:, [3, 0, 1, 2]].reshape(shape + (4,))
 
 
+def quat_to_rotvec(q: np.ndarray) -> np.ndarray:
+    """Quaternions (..., 4) -> axis-angle vectors (..., 3) (axis times angle in radians, angle in [0, pi]; SMPL's
+    pose parameters)."""
+    shape = q.shape[:-1]
+    xyzw = np.asarray(q, dtype=np.float64).reshape(-1, 4)[:, [1, 2, 3, 0]]
+    return Rotation.from_quat(xyzw).as_rotvec().reshape(shape + (3,))
+
+
+def rotvec_to_quat(v: np.ndarray) -> np.ndarray:
+    """Axis-angle vectors (..., 3) -> quaternions (..., 4) (w, x, y, z)."""
+    shape = v.shape[:-1]
+    xyzw = Rotation.from_rotvec(np.asarray(v, dtype=np.float64).reshape(-1, 3)).as_quat()
+    return xyzw[:, [3, 0, 1, 2]].reshape(shape + (4,))
+
+
 def _check_order(order: str) -> str:
     order = order.upper()
     if len(order) != 3 or set(order) - set("XYZ"):

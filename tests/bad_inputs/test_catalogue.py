@@ -185,11 +185,13 @@ CASES = [
     Case("prompts_file_empty", _prompts_file("\n  \n"), UsageError, "has no prompts"),
     Case("timed_prompt_zero_seconds", sample("prompts=[a person walks:0, a person waves:2]"), UsageError, "must be positive"),
     Case("export_unknown_format", sample("text=walk", "export=[fbx]"), UsageError, "choose from mp4, gif, bvh, html"),
+    Case("cleanup_unknown", sample("text=walk", "cleanup=hands"), UsageError, "choose cleanup=feet"),
     # commands: edit.py and evaluate.py
     Case("edit_input_missing", edit("input=/no/such/clip.bvh", "kind=inbetween"), UsageError, "not found"),
     Case("edit_unknown_clip_id", edit("input=test:no_such_clip", "kind=inbetween"), UsageError, "clip ids look like"),
     Case("edit_keeps_everything", edit(CLIP, "kind=inbetween", "prefix=0.6", "suffix=0.6"), UsageError, "leaving nothing to generate"),
     Case("edit_unknown_body_part", edit(CLIP, "kind=parts", "parts=[tail]"), UsageError, "unknown body part 'tail'"),
+    Case("edit_cleanup_unknown", edit(CLIP, "kind=inbetween", "cleanup=toes"), UsageError, "choose cleanup=feet"),
     Case("checkpoint_of_another_dataset", lambda tmp: run_entry("evaluate", tmp, "checkpoint=shipped", "dataset=kit", "wandb=false"),
          UsageError, "pass dataset=bandai_mini"),
     Case("evaluate_smoothing_negative", lambda tmp: run_entry("evaluate", tmp, "checkpoint=shipped", "smooth_sigma=-1", "wandb=false"),

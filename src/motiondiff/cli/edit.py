@@ -1,5 +1,6 @@
 """`python edit.py ...`: in-between a motion or regenerate some of its body parts with a trained model, and write the
-edited joints, features, the input, stick-figure videos and results.json with how well each edit kept the input."""
+edited joints, features, the input, stick-figure videos and results.json with how well each edit kept the input.
+`cleanup=feet` pins the generated feet during ground contacts; the frames and joints the edit kept do not move."""
 
 from __future__ import annotations
 
@@ -11,12 +12,13 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps
-from motiondiff.cli.sample import export_formats, slug
+from motiondiff.cli.sample import cleanup_option, export_formats, slug
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
+from motiondiff.edit.foot_cleanup import clean_foot_skate
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
-from motiondiff.export.outputs import export_features
+from motiondiff.export.outputs import check_formats_for, export_features
 from motiondiff.hardware import resolve_device
 from motiondiff.lit.conditions import check_action, check_text
 from motiondiff.lit.loading import load_model as load_module
@@ -80,9 +82,10 @@ def _check(cfg: DictConfig, module) -> int | None:
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_SAMPLE)  # types and ranges before any work
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
-    formats = export_formats(cfg)
+    formats, cleanup = export_formats(cfg), cleanup_option(cfg)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
+    check_formats_for(formats, module.representation.skeleton)
     steps = _check(cfg, module)
     condition = edit_condition(cfg, module)
     fps = float(module.hparams.fps)
@@ -112,7 +115,7 @@ def run(cfg: DictConfig) -> Path:
     except EditError as err:
         raise UsageError(str(err)) from None
     out = Path(HydraConfig.get().runtime.output_dir)
-    rows = save_edits(out, result, motion, module, formats, condition)
+    rows = save_edits(out, result, motion, module, formats, condition, cleanup)
     summary = {
         "checkpoint": str(ckpt),
         "input": {"source": str(cfg.input), "clip_id": motion.clip_id, "split": motion.split, "label": motion.label,
@@ -132,8 +135,12 @@ def run(cfg: DictConfig) -> Path:
     return out
 
 
-def save_edits(out: Path, result: EditResult, motion: InputMotion, module, formats, condition) -> list[dict]:
-    """The input and each edit as arrays and the ``formats`` (export.outputs); one results row per edit."""
+def save_edits(
+    out: Path, result: EditResult, motion: InputMotion, module, formats, condition, cleanup=None
+) -> list[dict]:
+    """The input and each edit as arrays and the ``formats`` (export.outputs); one results row per edit. With
+    ``cleanup="feet"`` the saved joints are foot-skate cleaned (kept frames and joints untouched; the model's joints
+    go to *_joints_raw.npy) and the row reports the sliding before and after."""
     fps = float(module.hparams.fps)
     rep = module.representation
     title = f"{result.kind}: {condition or 'unconditioned'}"
@@ -144,11 +151,17 @@ def save_edits(out: Path, result: EditResult, motion: InputMotion, module, forma
         stem = out / f"{result.kind}_{slug(condition)}_{k:02d}"
         files = {"joints": f"{stem}_joints.npy", "features": f"{stem}_features.npy",
                  "input_joints": f"{stem}_input_joints.npy"}  # fmt: skip
-        np.save(files["joints"], result.joints[k])
+        joints, feet = result.joints[k], None
+        if cleanup == "feet":
+            np.save(f"{stem}_joints_raw.npy", joints)
+            cleaned = clean_foot_skate(joints, rep.skeleton, fps, keep=result.kept_points(k))
+            joints, feet = cleaned.joints.astype(joints.dtype), cleaned.summary()
+        np.save(files["joints"], joints)
         np.save(files["features"], result.features[k])
         np.save(files["input_joints"], result.input_joints[k])
-        exports = export_features(stem, rep, result.features[k], fps, formats, title=title)
+        exports = export_features(stem, rep, result.features[k], fps, formats, title=title,
+                                  joints=joints if feet else None)  # fmt: skip
         rows.append({"index": k, **files, "video": exports.get("mp4", exports.get("gif")), "exports": exports,
                      "input_video": inputs.get("mp4", inputs.get("gif")), "input_exports": inputs,
-                     **edit_numbers(result, k, fps)})  # fmt: skip
+                     **edit_numbers(result, k, fps), **({"foot_cleanup": feet} if feet else {})})  # fmt: skip
     return rows

@@ -2,7 +2,8 @@
 stick-figure videos, plus results.json with what each sample measurably does.
 
 Timed prompts, `prompts="[a person walks forward:4, a person waves:3]"` (or `action="[walk:4, wave:3]"`), make ONE
-long motion that follows them in order (`edit.long_motion`); `smooth_sigma=` applies vvMDM's temporal filter."""
+long motion that follows them in order (`edit.long_motion`); `smooth_sigma=` applies vvMDM's temporal filter and
+`cleanup=feet` pins the feet during ground contacts (`edit.foot_cleanup`)."""
 
 from __future__ import annotations
 
@@ -28,10 +29,11 @@ from motiondiff.cli.common import (
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.data.preparing.captions import measure
 from motiondiff.data.representations.spec import bridge_from_spec
+from motiondiff.edit.foot_cleanup import clean_foot_skate
 from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
-from motiondiff.export.outputs import export_features, parse_formats
+from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
 from motiondiff.hardware import resolve_device
 from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.diffusion import MotionDiffusionModule
@@ -140,8 +142,9 @@ def run(cfg: DictConfig) -> Path:
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir, "action" if cfg.action is not None else "text")
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
-    formats = export_formats(cfg)
+    formats, cleanup = export_formats(cfg), cleanup_option(cfg)
     module = load_model(ckpt, cfg.device)
+    check_formats_for(formats, module.representation.skeleton)
     prompts = collect_prompts(plain, module)
     frames = num_frames(cfg, module) if seconds is None else None
     sigma = smoothing_sigma(cfg, module)
@@ -156,7 +159,8 @@ def run(cfg: DictConfig) -> Path:
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "steps": steps,
                "clip_x0": module.clip_rule}  # fmt: skip
     if seconds is not None:
-        summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats))
+        summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats,
+                                   cleanup))  # fmt: skip
         (out / "results.json").write_text(json.dumps(summary, indent=1))
         print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
         return out
@@ -168,7 +172,7 @@ def run(cfg: DictConfig) -> Path:
                                   guidance=guidance, sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta),
                                   progress=True)  # fmt: skip
         feats = np.stack(feats)
-        results += save_samples(out, prompt, feats, module, formats, sigma)
+        results += save_samples(out, prompt, feats, module, formats, sigma, cleanup=cleanup)
     summary["samples"] = results
     (out / "results.json").write_text(json.dumps(summary, indent=1))
     print(f"\n{len(results)} sample(s) written to {out}")
@@ -176,11 +180,23 @@ def run(cfg: DictConfig) -> Path:
 
 
 def export_formats(cfg: DictConfig) -> list[str]:
-    """The ``export=`` formats (mp4, gif, bvh, html; none), checked before anything is sampled."""
+    """The ``export=`` formats (mp4, gif, bvh, html, smpl; none), checked before anything is sampled."""
     try:
         return parse_formats(cfg.export if not isinstance(cfg.export, ListConfig) else list(cfg.export))
     except ValueError as err:
         raise UsageError(str(err)) from None
+
+
+def cleanup_option(cfg: DictConfig) -> str | None:
+    """``cleanup=``: "feet" (foot-skate cleanup of the saved joints) or null/none (off)."""
+    value = cfg.get("cleanup")
+    if value is None or (isinstance(value, str) and value.strip().lower() == "none"):
+        return None
+    if not isinstance(value, str) or value.strip().lower() != "feet":
+        raise UsageError(
+            f"cleanup={value!r}: choose cleanup=feet (pin the feet during ground contacts) or cleanup=none"
+        )
+    return "feet"
 
 
 def smoothing_sigma(cfg: DictConfig, module: MotionDiffusionModule | None = None) -> float | None:
@@ -221,7 +237,7 @@ def long_motion_settings(cfg, module, prompts: list, seconds: list[float]) -> tu
     return float(overlap), float(blend)
 
 
-def sample_long(cfg, out, module, prompts: list, seconds: list[float], guidance, steps, generator, sigma, formats):
+def sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats, cleanup=None):
     """One long motion per sample through the timed prompts; returns the results.json entries."""
     overlap, blend = long_motion_settings(cfg, module, prompts, seconds)
     n = cfg.num_samples
@@ -235,7 +251,7 @@ def sample_long(cfg, out, module, prompts: list, seconds: list[float], guidance,
     title = ", ".join(f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True))
     shown = [(s["start"], str(s["label"])) for s in long.segments]  # the videos show the prompt playing
     rows = save_samples(out, title, long.features, module, formats, sigma, stem=f"long_{slug(' then '.join(prompts))}",
-                        title=shown)  # fmt: skip
+                        cleanup=cleanup, title=shown)  # fmt: skip
     seams, blends = [w.plan.start for w in long.windows[1:]], [w.plan.blend for w in long.windows[1:]]
     for row, joints, boundaries in zip(rows, long.joints, long.boundaries, strict=True):
         if sigma is not None:  # the filter also runs across the seams: how they look in the saved joints
@@ -262,10 +278,12 @@ def save_samples(
     formats,
     sigma: float | None = None,
     stem=None,
+    cleanup: str | None = None,
     title=None,
 ) -> list[dict]:
     """Joints, features and the ``formats`` (export.outputs) per sample; with ``sigma`` the saved joints are the
-    smoothed ones (the raw ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after.
+    smoothed ones (the raw ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after;
+    with ``cleanup="feet"`` they are then foot-skate cleaned and the row reports the foot sliding before and after.
     ``title``: what the videos and viewer show (default the prompt; a long motion's (first frame, prompt) segments)."""
     rep = module.representation
     bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
@@ -283,10 +301,19 @@ def save_samples(
             after = smoothness_of_joints(feature_joints, bridge.feature_skeleton)
             smoothing = {"sigma_frames": sigma, "smoothness_before": before, "smoothness_after": after,
                          "measured_on": "HumanML3D features of the joints, as evaluate.py"}  # fmt: skip
+        feet = None
+        if cleanup == "feet":
+            if sigma is None:
+                np.save(f"{stem_k}_joints_raw.npy", joints)
+            cleaned = clean_foot_skate(joints, rep.skeleton, fps)
+            joints, feet = cleaned.joints.astype(np.float32), cleaned.summary()
+            feature_joints = joints if bridge.identity else clean_foot_skate(feature_joints, bridge.feature_skeleton,
+                                                                             fps).joints  # fmt: skip
         np.save(f"{stem_k}_joints.npy", joints)
         np.save(f"{stem_k}_features.npy", f.astype(np.float32))
+        changed = sigma is not None or cleanup is not None
         exports = export_features(stem_k, rep, f, fps, formats, title=title or prompt or "unconditioned",
-                                  joints=joints if sigma is not None else None)  # fmt: skip
+                                  joints=joints if changed else None)  # fmt: skip
         facts = measure(feature_joints, fps)
         speed = mean_joint_speed(feature_joints, fps)
         rows.append(
@@ -299,6 +326,7 @@ def save_samples(
                 "mean_joint_speed": speed,
                 **asdict(facts),
                 **({"smoothing": smoothing} if smoothing else {}),
+                **({"foot_cleanup": feet} if feet else {}),
             }  # fmt: skip
         )
     return rows

@@ -44,7 +44,8 @@ def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, 
 
 
 def run(cfg: DictConfig) -> Path:
-    from motiondiff.cli.sample import export_formats, save_samples, smoothing_sigma
+    from motiondiff.cli.sample import cleanup_option, export_formats, save_samples, smoothing_sigma
+    from motiondiff.export.outputs import check_formats_for
     from motiondiff.lit.conditions import check_text
     from motiondiff.lit.loading import load_model
     from motiondiff.pipelines import GuidedMotionPipeline
@@ -54,11 +55,12 @@ def run(cfg: DictConfig) -> Path:
     if cfg.text is None:
         raise UsageError('method=guidedmotion needs text="..." (one caption; its verbs become the local actions)')
     text = check_text(cfg.text)
-    formats, sigma = export_formats(cfg), smoothing_sigma(cfg)
+    formats, sigma, cleanup = export_formats(cfg), smoothing_sigma(cfg), cleanup_option(cfg)
     if cfg.checkpoint in ("shipped", "latest", "best"):
         raise UsageError("method=guidedmotion needs checkpoint=<path to a train_latent.py checkpoint>")
     path = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = HierarchicalLatentModule.load_from_checkpoint(path, map_location=cfg.device, weights_only=True).eval()
+    check_formats_for(formats, module.decoder.representation.skeleton)
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     steps = level_steps(cfg, module)
@@ -78,7 +80,7 @@ def run(cfg: DictConfig) -> Path:
                   local_weights=weights, local_candidates=int(cfg.local_candidates), local_choice=_choice(cfg.local_choice),
                   level_steps=tuple(steps[level] for level in LEVELS), guidance=cfg.guidance, rho=float(cfg.rho),
                   seed=int(cfg.seed))  # fmt: skip
-    rows = save_samples(out, text, np.stack(result.features), module.decoder, formats, sigma)
+    rows = save_samples(out, text, np.stack(result.features), module.decoder, formats, sigma, cleanup=cleanup)
     summary = {
         "method": "guidedmotion", "checkpoint": str(path), "text": text, "level_steps": steps, "rho": float(cfg.rho),
         "guidance": module.hparams.sampling.get("guidance", 7.5) if cfg.guidance is None else float(cfg.guidance),

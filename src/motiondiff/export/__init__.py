@@ -4,6 +4,8 @@
 - mp4 / gif: stick-figure video (render.render_motion);
 - bvh: animation file on the skeleton (bvh_export; fit error in its ExportReport);
 - html: offline interactive 3D viewer (html_viewer).
+
+SMPL parameters (.npz, AMASS layout) of SMPL-22/24 motions: `export_smpl` (smpl_export; export=smpl in the CLIs).
 """
 
 from __future__ import annotations
@@ -16,9 +18,11 @@ from motiondiff.atomic import atomic_write
 from motiondiff.export.bvh_export import ExportReport, export_bvh, export_bvh_from_features
 from motiondiff.export.html_viewer import export_html
 from motiondiff.export.render import Title, render_motion
+from motiondiff.export.smpl_export import export_smpl, export_smpl_from_features, smpl_joints
 from motiondiff.skeleton import Skeleton
 
-__all__ = ["FORMATS", "ExportReport", "export_bvh", "export_bvh_from_features", "export_html", "export_motion"]
+__all__ = ["FORMATS", "ExportReport", "export_bvh", "export_bvh_from_features", "export_html", "export_motion",
+           "export_smpl", "export_smpl_from_features", "smpl_joints"]  # fmt: skip
 
 FORMATS = ("npy", "mp4", "gif", "bvh", "html")
 

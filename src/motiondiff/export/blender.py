@@ -15,6 +15,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from motiondiff.errors import UsageError
+
 BLENDER_FORMATS = ("fbx", "glb")
 INSTALL_HINT = (
     'fbx/glb export needs Blender: pip install "motiondiff[blender]" (the bpy module, Python 3.11, about 400 MB), '
@@ -57,7 +59,7 @@ def blender_command() -> list[str] | None:
 def check_blender(formats) -> None:
     """One clear error, before any work, when fbx/glb are asked for and there is no Blender."""
     if any(f in BLENDER_FORMATS for f in formats) and blender_command() is None:
-        raise ValueError(INSTALL_HINT)
+        raise UsageError(INSTALL_HINT)
 
 
 def convert_bvh(bvh: str | Path, out: str | Path, fps: float, timeout: float = 300) -> Path:
@@ -67,7 +69,7 @@ def convert_bvh(bvh: str | Path, out: str | Path, fps: float, timeout: float = 3
         raise ValueError(f"cannot convert to {out.name}: use a .fbx or .glb file name")
     command = blender_command()
     if command is None:
-        raise ValueError(INSTALL_HINT)
+        raise UsageError(INSTALL_HINT)
     tmp = out.with_name(f".{out.stem}.partial{out.suffix}")
     args = ["--"] if "--python-expr" in command else []
     proc = subprocess.run([*command, _SCRIPT, *args, str(bvh), str(tmp), repr(float(fps))], capture_output=True,

@@ -40,8 +40,8 @@ TWIST_HALF_LIFE_S = 1.0  # seconds for a twist carried through a swing singulari
 
 @dataclass(frozen=True)
 class ExportReport:
-    """Where a BVH went and how closely it reproduces the joints (metres): max and mean over frames and joints of
-    |FK(file motion) - joints|. Usable as a path (os.fspath)."""
+    """Where an exported file (a BVH, or SMPL parameters: smpl_export) went and how closely it reproduces the joints
+    (metres): max and mean over frames and joints of |FK(file motion) - joints|. Usable as a path (os.fspath)."""
 
     path: Path
     max_error: float

@@ -1,8 +1,9 @@
-"""What sample.py and edit.py write for each generated motion besides its arrays: videos, a BVH, an HTML viewer.
+"""What sample.py and edit.py write for each generated motion besides its arrays: videos, a BVH, an HTML viewer,
+SMPL parameters.
 
 One call per motion, `export_features`, from the de-normalised features of the model's representation (the BVH of
 a rotation representation then carries the model's own rotations) or from joints that were changed after decoding
-(smoothed: their BVH is solved by IK, so the file shows what was saved).
+(smoothed: their BVH and SMPL files are solved by IK, so the files show what was saved).
 """
 
 from __future__ import annotations
@@ -14,10 +15,14 @@ import numpy as np
 
 from motiondiff.data.representations import Representation
 from motiondiff.export import export_motion
+from motiondiff.export.blender import BLENDER_FORMATS, check_blender, convert_bvh
 from motiondiff.export.bvh_export import export_bvh, export_bvh_from_features
 from motiondiff.export.render import Title
+from motiondiff.export.smpl_export import check_smpl_skeleton, export_smpl, export_smpl_from_features
+from motiondiff.skeleton import Skeleton
 
-OUTPUT_FORMATS = ("mp4", "gif", "bvh", "html")  # the arrays (.npy) are always written
+OUTPUT_FORMATS = ("mp4", "gif", "bvh", "html", "smpl", *BLENDER_FORMATS)  # the arrays (.npy) are always written
+ROTATION_FORMATS = ("bvh", "smpl")  # written from the features (a model's own rotations), or solved from changed joints
 
 
 def parse_formats(value: str | Sequence[str] | None) -> list[str]:
@@ -36,6 +41,15 @@ def parse_formats(value: str | Sequence[str] | None) -> list[str]:
     return list(dict.fromkeys(formats))
 
 
+def check_formats_for(formats: Sequence[str], skeleton: Skeleton) -> None:
+    """Refuse, before anything is generated or written, formats the skeleton cannot be written in (smpl: SMPL-22
+    or SMPL-24 only); one UsageError naming what is supported."""
+    formats = parse_formats(formats)
+    if "smpl" in formats:
+        check_smpl_skeleton(skeleton)
+    check_blender(formats)  # fbx/glb: Blender must be there
+
+
 def export_features(
     stem: str | Path,
     representation: Representation,
@@ -47,9 +61,11 @@ def export_features(
 ) -> dict:
     """Write ``{stem}.{format}`` for each format; returns {format: path} and, with a BVH, its fit error
     ("bvh_max_error_m", "bvh_mean_error_m": FK of the file against the joints it was made from; generated joints
-    stretch their bones from frame to frame, which a BVH's fixed bone lengths cannot follow exactly). ``joints``: the motion to show when
-    it is not simply the features decoded (e.g. smoothed)."""
+    stretch their bones from frame to frame, which a BVH's fixed bone lengths cannot follow exactly); with smpl,
+    ``{stem}_smpl.npz`` and the same three numbers ("smpl_max_error_m", ...). ``joints``: the motion to show when
+    it is not simply the features decoded (e.g. smoothed or cleaned up)."""
     formats = parse_formats(formats)
+    check_formats_for(formats, representation.skeleton)
     stem = Path(stem)
     written: dict = {}
     if "bvh" in formats:
@@ -60,7 +76,30 @@ def export_features(
             report = export_bvh(path, joints, representation.skeleton, fps)
         written.update(bvh=str(report.path), bvh_max_error_m=report.max_error, bvh_mean_error_m=report.mean_error,
                        bvh_method=report.method)  # fmt: skip
-    others = [f for f in formats if f != "bvh"]
+    if "smpl" in formats:
+        path = stem.parent / f"{stem.name}_smpl.npz"
+        if joints is None:
+            report = export_smpl_from_features(path, representation, features, fps)
+        else:
+            report = export_smpl(path, joints, representation.skeleton, fps)
+        written.update(smpl=str(report.path), smpl_max_error_m=report.max_error,
+                       smpl_mean_error_m=report.mean_error, smpl_method=report.method)  # fmt: skip
+    blender = [f for f in formats if f in BLENDER_FORMATS]
+    if blender:  # Blender's own FBX/glTF writers, from this motion's BVH
+        bvh = written.get("bvh")
+        scratch = None if bvh else stem.parent / f".{stem.name}.for_blender.bvh"
+        if scratch is not None:
+            if joints is None:
+                export_bvh_from_features(scratch, representation, features, fps)
+            else:
+                export_bvh(scratch, joints, representation.skeleton, fps)
+        try:
+            for fmt in blender:
+                written[fmt] = str(convert_bvh(bvh or scratch, stem.parent / f"{stem.name}.{fmt}", fps))
+        finally:
+            if scratch is not None:
+                scratch.unlink(missing_ok=True)
+    others = [f for f in formats if f not in ROTATION_FORMATS and f not in BLENDER_FORMATS]
     if others:
         shown = representation.decode_numpy(np.asarray(features)) if joints is None else joints
         paths = export_motion(stem, shown, representation.skeleton, fps, others, title=title)

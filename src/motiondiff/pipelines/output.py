@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.data.representations import Representation
-from motiondiff.export.outputs import export_features, parse_formats
+from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
 from motiondiff.skeleton import Skeleton
 
 
@@ -41,9 +41,11 @@ class MotionOutput:
         return len(self.joints[i]) / self.fps
 
     def save(self, folder: str | Path, formats=("bvh",)) -> list[dict]:
-        """Write each motion's joints and features (.npy) and the ``formats`` (bvh, mp4, gif, html) to ``folder``,
-        with results.json listing the files; returns its rows. The folder is created if needed."""
+        """Write each motion's joints and features (.npy) and the ``formats`` (bvh, mp4, gif, html, smpl) to
+        ``folder``, with results.json listing the files; returns its rows. The folder is created if needed; formats
+        the skeleton cannot take (smpl off SMPL-22/24) are refused before anything is written."""
         formats = parse_formats(list(formats) if not isinstance(formats, str) else formats)
+        check_formats_for(formats, self.representation.skeleton)
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         rows = []

@@ -21,7 +21,7 @@ _KINDS = {bool: "true or false", int: "a whole number", float: "a number", str: 
 _SAMPLING = {"steps": int, "guidance": float, "smooth_sigma": float}
 # per study, the keys that take numbers or lists although their default is null, or null although it is not
 TYPES = {"action_accuracy": _SAMPLING, "behaviour": _SAMPLING, "editing": {"steps": int, "guidance": float},
-         "sampler_curve": {"runs": list}}  # fmt: skip
+         "sampler_curve": {"runs": list}, "foot_cleanup": {"steps": int}}  # fmt: skip
 
 
 def study_config(name: str, argv: list[str]) -> DictConfig:

@@ -9,6 +9,7 @@ import subprocess
 import pytest
 from fixtures.synthetic_motion import glide
 
+from motiondiff.errors import UsageError
 from motiondiff.export.blender import BLENDER_FORMATS, blender_command, check_blender, convert_bvh
 from motiondiff.export.bvh_export import export_bvh
 from motiondiff.skeleton import SMPL22
@@ -30,7 +31,7 @@ print("RESULT", len(arm.data.bones), round(end - start) + 1)
 def test_without_blender_fbx_is_one_clear_error(monkeypatch):
     monkeypatch.setattr("motiondiff.export.blender.blender_command", lambda: None)
     check_blender(["bvh", "mp4"])  # nothing asked of Blender: fine
-    with pytest.raises(ValueError, match=r'pip install "motiondiff\[blender\]"'):
+    with pytest.raises(UsageError, match=r'pip install "motiondiff\[blender\]"'):
         check_blender(["bvh", "glb"])
 
 
