@@ -184,7 +184,7 @@ CASES = [
     Case("prompts_file_missing", lambda tmp: run_entry("sample", tmp, "checkpoint=shipped", f"prompts_file={tmp}/none.txt"), UsageError, "not found"),
     Case("prompts_file_empty", _prompts_file("\n  \n"), UsageError, "has no prompts"),
     Case("timed_prompt_zero_seconds", sample("prompts=[a person walks:0, a person waves:2]"), UsageError, "must be positive"),
-    Case("export_unknown_format", sample("text=walk", "export=[fbx]"), UsageError, "choose from mp4, gif, bvh, html"),
+    Case("export_unknown_format", sample("text=walk", "export=[usd]"), UsageError, "choose from mp4, gif, bvh, html"),
     Case("cleanup_unknown", sample("text=walk", "cleanup=hands"), UsageError, "choose cleanup=feet"),
     # commands: edit.py and evaluate.py
     Case("edit_input_missing", edit("input=/no/such/clip.bvh", "kind=inbetween"), UsageError, "not found"),

@@ -202,10 +202,10 @@ def test_shipped_action_model_samples_an_action_by_name(tmp_path):
 
 
 def test_bad_export_format_is_named_before_sampling(tmp_path):
-    proc = run_cli("sample.py", "checkpoint=shipped", "text=a person waves", "export=[mp4,fbx]", env_dir=tmp_path,
+    proc = run_cli("sample.py", "checkpoint=shipped", "text=a person waves", "export=[mp4,usd]", env_dir=tmp_path,
                    check=False)  # fmt: skip
     assert proc.returncode == 2
-    assert "unknown export format(s) fbx; choose from mp4, gif, bvh, html" in proc.stderr
+    assert "unknown export format(s) usd; choose from mp4, gif, bvh, html" in proc.stderr
     assert not (tmp_path / "outputs" / "sample").exists() or not any((tmp_path / "outputs" / "sample").rglob("*.npy"))
 
 
