@@ -85,7 +85,7 @@ def run(cfg: DictConfig) -> Path:
     formats, cleanup = export_formats(cfg), cleanup_option(cfg)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
-    check_formats_for(formats, module.representation.skeleton)
+    check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"))
     steps = _check(cfg, module)
     condition = edit_condition(cfg, module)
     fps = float(module.hparams.fps)
@@ -115,7 +115,7 @@ def run(cfg: DictConfig) -> Path:
     except EditError as err:
         raise UsageError(str(err)) from None
     out = Path(HydraConfig.get().runtime.output_dir)
-    rows = save_edits(out, result, motion, module, formats, condition, cleanup)
+    rows = save_edits(out, result, motion, module, formats, condition, cleanup, cfg.get("bvh_names"))
     summary = {
         "checkpoint": str(ckpt),
         "input": {"source": str(cfg.input), "clip_id": motion.clip_id, "split": motion.split, "label": motion.label,
@@ -136,7 +136,7 @@ def run(cfg: DictConfig) -> Path:
 
 
 def save_edits(
-    out: Path, result: EditResult, motion: InputMotion, module, formats, condition, cleanup=None
+    out: Path, result: EditResult, motion: InputMotion, module, formats, condition, cleanup=None, rig_names=None
 ) -> list[dict]:
     """The input and each edit as arrays and the ``formats`` (export.outputs); one results row per edit. With
     ``cleanup="feet"`` the saved joints are foot-skate cleaned (kept frames and joints untouched; the model's joints
@@ -144,7 +144,7 @@ def save_edits(
     fps = float(module.hparams.fps)
     rep = module.representation
     title = f"{result.kind}: {condition or 'unconditioned'}"
-    inputs = export_features(out / "input", rep, motion.features, fps, formats, title="input")
+    inputs = export_features(out / "input", rep, motion.features, fps, formats, title="input", rig_names=rig_names)
     np.save(out / "keep_mask.npy", result.keep[0])
     rows = []
     for k in range(len(result)):
@@ -160,7 +160,7 @@ def save_edits(
         np.save(files["features"], result.features[k])
         np.save(files["input_joints"], result.input_joints[k])
         exports = export_features(stem, rep, result.features[k], fps, formats, title=title,
-                                  joints=joints if feet else None)  # fmt: skip
+                                  joints=joints if feet else None, rig_names=rig_names)  # fmt: skip
         rows.append({"index": k, **files, "video": exports.get("mp4", exports.get("gif")), "exports": exports,
                      "input_video": inputs.get("mp4", inputs.get("gif")), "input_exports": inputs,
                      **edit_numbers(result, k, fps), **({"foot_cleanup": feet} if feet else {})})  # fmt: skip

@@ -144,7 +144,7 @@ def run(cfg: DictConfig) -> Path:
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
     formats, cleanup = export_formats(cfg), cleanup_option(cfg)
     module = load_model(ckpt, cfg.device)
-    check_formats_for(formats, module.representation.skeleton)
+    check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"))
     prompts = collect_prompts(plain, module)
     frames = num_frames(cfg, module) if seconds is None else None
     sigma = smoothing_sigma(cfg, module)
@@ -172,7 +172,9 @@ def run(cfg: DictConfig) -> Path:
                                   guidance=guidance, sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta),
                                   progress=True)  # fmt: skip
         feats = np.stack(feats)
-        results += save_samples(out, prompt, feats, module, formats, sigma, cleanup=cleanup)
+        results += save_samples(
+            out, prompt, feats, module, formats, sigma, cleanup=cleanup, rig_names=cfg.get("bvh_names")
+        )
     summary["samples"] = results
     (out / "results.json").write_text(json.dumps(summary, indent=1))
     print(f"\n{len(results)} sample(s) written to {out}")
@@ -251,7 +253,7 @@ def sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, 
     title = ", ".join(f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True))
     shown = [(s["start"], str(s["label"])) for s in long.segments]  # the videos show the prompt playing
     rows = save_samples(out, title, long.features, module, formats, sigma, stem=f"long_{slug(' then '.join(prompts))}",
-                        cleanup=cleanup, title=shown)  # fmt: skip
+                        cleanup=cleanup, title=shown, rig_names=cfg.get("bvh_names"))  # fmt: skip
     seams, blends = [w.plan.start for w in long.windows[1:]], [w.plan.blend for w in long.windows[1:]]
     for row, joints, boundaries in zip(rows, long.joints, long.boundaries, strict=True):
         if sigma is not None:  # the filter also runs across the seams: how they look in the saved joints
@@ -280,11 +282,13 @@ def save_samples(
     stem=None,
     cleanup: str | None = None,
     title=None,
+    rig_names: str | None = None,
 ) -> list[dict]:
     """Joints, features and the ``formats`` (export.outputs) per sample; with ``sigma`` the saved joints are the
     smoothed ones (the raw ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after;
     with ``cleanup="feet"`` they are then foot-skate cleaned and the row reports the foot sliding before and after.
-    ``title``: what the videos and viewer show (default the prompt; a long motion's (first frame, prompt) segments)."""
+    ``title``: what the videos and viewer show (default the prompt; a long motion's (first frame, prompt) segments);
+    ``rig_names``: bone names of the bvh/fbx/glb files (export.rig_names: smpl, mixamo)."""
     rep = module.representation
     bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
     fps = module.hparams.fps
@@ -313,7 +317,7 @@ def save_samples(
         np.save(f"{stem_k}_features.npy", f.astype(np.float32))
         changed = sigma is not None or cleanup is not None
         exports = export_features(stem_k, rep, f, fps, formats, title=title or prompt or "unconditioned",
-                                  joints=joints if changed else None)  # fmt: skip
+                                  joints=joints if changed else None, rig_names=rig_names)  # fmt: skip
         facts = measure(feature_joints, fps)
         speed = mean_joint_speed(feature_joints, fps)
         rows.append(

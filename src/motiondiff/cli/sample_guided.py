@@ -60,7 +60,7 @@ def run(cfg: DictConfig) -> Path:
         raise UsageError("method=guidedmotion needs checkpoint=<path to a train_latent.py checkpoint>")
     path = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = HierarchicalLatentModule.load_from_checkpoint(path, map_location=cfg.device, weights_only=True).eval()
-    check_formats_for(formats, module.decoder.representation.skeleton)
+    check_formats_for(formats, module.decoder.representation.skeleton, cfg.get("bvh_names"))
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     steps = level_steps(cfg, module)
@@ -80,7 +80,16 @@ def run(cfg: DictConfig) -> Path:
                   local_weights=weights, local_candidates=int(cfg.local_candidates), local_choice=_choice(cfg.local_choice),
                   level_steps=tuple(steps[level] for level in LEVELS), guidance=cfg.guidance, rho=float(cfg.rho),
                   seed=int(cfg.seed))  # fmt: skip
-    rows = save_samples(out, text, np.stack(result.features), module.decoder, formats, sigma, cleanup=cleanup)
+    rows = save_samples(
+        out,
+        text,
+        np.stack(result.features),
+        module.decoder,
+        formats,
+        sigma,
+        cleanup=cleanup,
+        rig_names=cfg.get("bvh_names"),
+    )
     summary = {
         "method": "guidedmotion", "checkpoint": str(path), "text": text, "level_steps": steps, "rho": float(cfg.rho),
         "guidance": module.hparams.sampling.get("guidance", 7.5) if cfg.guidance is None else float(cfg.guidance),

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
+from motiondiff.export.rig_names import with_rig_names
 from motiondiff.inverse_kinematics import fit_rest_offsets, solve_rotations
 from motiondiff.rotations import matrix_to_quat, qfix, qnormalize
 from motiondiff.skeleton import Skeleton
@@ -107,10 +108,12 @@ def export_bvh_from_features(
     *,
     offsets: np.ndarray | None = None,
     scale: float = 1.0,
+    names: str | None = None,
 ) -> ExportReport:
     """Write de-normalised features (N, D) of `representation` as a BVH on its skeleton: a rotation representation's
     own rotations and root (no IK; `offsets` default to the rig's mean offsets), else the decoded joints through IK.
-    The fit error is measured against the representation's own decoding."""
+    The fit error is measured against the representation's own decoding. ``names``: a rig's bone names
+    (export.rig_names: smpl, mixamo) instead of the skeleton's."""
     from motiondiff.data.representations import RotationRepresentation  # torch: only when features are exported
 
     features = np.asarray(features, dtype=np.float64)
@@ -121,7 +124,7 @@ def export_bvh_from_features(
         )
     if not np.isfinite(features).all():
         raise ValueError("export_bvh_from_features: features contain NaN or Inf; the sample diverged, resample it")
-    skeleton = representation.skeleton
+    skeleton = with_rig_names(representation.skeleton, names)
     joints = representation.decode_numpy(features, offsets)
     if isinstance(representation, RotationRepresentation):
         import torch

@@ -18,6 +18,7 @@ from motiondiff.export import export_motion
 from motiondiff.export.blender import BLENDER_FORMATS, check_blender, convert_bvh
 from motiondiff.export.bvh_export import export_bvh, export_bvh_from_features
 from motiondiff.export.render import Title
+from motiondiff.export.rig_names import with_rig_names
 from motiondiff.export.smpl_export import check_smpl_skeleton, export_smpl, export_smpl_from_features
 from motiondiff.skeleton import Skeleton
 
@@ -41,13 +42,14 @@ def parse_formats(value: str | Sequence[str] | None) -> list[str]:
     return list(dict.fromkeys(formats))
 
 
-def check_formats_for(formats: Sequence[str], skeleton: Skeleton) -> None:
+def check_formats_for(formats: Sequence[str], skeleton: Skeleton, rig_names: str | None = None) -> None:
     """Refuse, before anything is generated or written, formats the skeleton cannot be written in (smpl: SMPL-22
     or SMPL-24 only); one UsageError naming what is supported."""
     formats = parse_formats(formats)
     if "smpl" in formats:
         check_smpl_skeleton(skeleton)
     check_blender(formats)  # fbx/glb: Blender must be there
+    with_rig_names(skeleton, rig_names)  # a preset this skeleton has names for
 
 
 def export_features(
@@ -58,6 +60,7 @@ def export_features(
     formats: Sequence[str],
     title: Title = "",
     joints: np.ndarray | None = None,
+    rig_names: str | None = None,
 ) -> dict:
     """Write ``{stem}.{format}`` for each format; returns {format: path} and, with a BVH, its fit error
     ("bvh_max_error_m", "bvh_mean_error_m": FK of the file against the joints it was made from; generated joints
@@ -65,15 +68,16 @@ def export_features(
     ``{stem}_smpl.npz`` and the same three numbers ("smpl_max_error_m", ...). ``joints``: the motion to show when
     it is not simply the features decoded (e.g. smoothed or cleaned up)."""
     formats = parse_formats(formats)
-    check_formats_for(formats, representation.skeleton)
+    check_formats_for(formats, representation.skeleton, rig_names)
+    named = with_rig_names(representation.skeleton, rig_names)  # bone names of the bvh/fbx/glb files
     stem = Path(stem)
     written: dict = {}
     if "bvh" in formats:
         path = stem.parent / f"{stem.name}.bvh"
         if joints is None:
-            report = export_bvh_from_features(path, representation, features, fps)
+            report = export_bvh_from_features(path, representation, features, fps, names=rig_names)
         else:
-            report = export_bvh(path, joints, representation.skeleton, fps)
+            report = export_bvh(path, joints, named, fps)
         written.update(bvh=str(report.path), bvh_max_error_m=report.max_error, bvh_mean_error_m=report.mean_error,
                        bvh_method=report.method)  # fmt: skip
     if "smpl" in formats:
@@ -90,9 +94,9 @@ def export_features(
         scratch = None if bvh else stem.parent / f".{stem.name}.for_blender.bvh"
         if scratch is not None:
             if joints is None:
-                export_bvh_from_features(scratch, representation, features, fps)
+                export_bvh_from_features(scratch, representation, features, fps, names=rig_names)
             else:
-                export_bvh(scratch, joints, representation.skeleton, fps)
+                export_bvh(scratch, joints, named, fps)
         try:
             for fmt in blender:
                 written[fmt] = str(convert_bvh(bvh or scratch, stem.parent / f"{stem.name}.{fmt}", fps))

@@ -8,6 +8,7 @@ import json
 from functools import cache
 from importlib import resources
 
+from motiondiff.errors import UsageError
 from motiondiff.skeleton import Skeleton
 
 
@@ -26,9 +27,9 @@ def with_rig_names(skeleton: Skeleton, preset: str | None) -> Skeleton:
         return skeleton
     table = _table()
     if preset not in table["presets"]:
-        raise ValueError(f"unknown joint-name preset {preset!r}; choose from {', '.join(rig_presets())} (or null)")
+        raise UsageError(f"unknown joint-name preset {preset!r}; choose from {', '.join(rig_presets())} (or null)")
     names = table["presets"][preset]
     if skeleton.name != table["skeleton"] or set(skeleton.joint_names) != set(names):
-        raise ValueError(f"joint-name presets name the {table['skeleton']} skeleton's joints; this motion is on "
+        raise UsageError(f"joint-name presets name the {table['skeleton']} skeleton's joints; this motion is on "
                          f"{skeleton.name!r}: export it without bvh_names")  # fmt: skip
     return dataclasses.replace(skeleton, joint_names=tuple(names[n] for n in skeleton.joint_names))

@@ -40,12 +40,13 @@ class MotionOutput:
     def seconds(self, i: int = 0) -> float:
         return len(self.joints[i]) / self.fps
 
-    def save(self, folder: str | Path, formats=("bvh",)) -> list[dict]:
+    def save(self, folder: str | Path, formats=("bvh",), rig_names: str | None = None) -> list[dict]:
         """Write each motion's joints and features (.npy) and the ``formats`` (bvh, mp4, gif, html, smpl) to
         ``folder``, with results.json listing the files; returns its rows. The folder is created if needed; formats
-        the skeleton cannot take (smpl off SMPL-22/24) are refused before anything is written."""
+        the skeleton cannot take (smpl off SMPL-22/24) are refused before anything is written. ``rig_names``: bone
+        names of the bvh/fbx/glb files (smpl or mixamo; None: the skeleton's)."""
         formats = parse_formats(list(formats) if not isinstance(formats, str) else formats)
-        check_formats_for(formats, self.representation.skeleton)
+        check_formats_for(formats, self.representation.skeleton, rig_names)
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         rows = []
@@ -54,7 +55,7 @@ class MotionOutput:
             np.save(f"{stem}_joints.npy", joints.astype(np.float32))
             np.save(f"{stem}_features.npy", feats.astype(np.float32))
             exports = export_features(stem, self.representation, feats, self.fps, formats, title=prompt or "",
-                                      joints=self._changed(i))  # fmt: skip
+                                      joints=self._changed(i), rig_names=rig_names)  # fmt: skip
             rows.append({"prompt": prompt, "index": i, "frames": len(joints), "joints": f"{stem}_joints.npy",
                          "features": f"{stem}_features.npy", "exports": exports})  # fmt: skip
         (folder / "results.json").write_text(json.dumps({"info": self.info, "samples": rows}, indent=1, default=str))

@@ -8,6 +8,7 @@ import pytest
 from fixtures.synthetic_motion import glide
 
 from motiondiff.data.formats.bvh import read_bvh
+from motiondiff.errors import UsageError
 from motiondiff.export.bvh_export import export_bvh
 from motiondiff.export.rig_names import rig_presets, with_rig_names
 from motiondiff.skeleton import KIT21, SMPL22
@@ -28,7 +29,20 @@ def test_presets_rename_the_joints_and_keep_the_motion(tmp_path, preset, pelvis,
 def test_other_skeletons_and_unknown_presets_are_clear_errors():
     assert rig_presets() == ["mixamo", "smpl"]
     assert with_rig_names(SMPL22, None) is SMPL22
-    with pytest.raises(ValueError, match="this motion is on 'kit21'"):
+    with pytest.raises(UsageError, match="this motion is on 'kit21'"):
         with_rig_names(KIT21, "mixamo")
-    with pytest.raises(ValueError, match="choose from mixamo, smpl"):
+    with pytest.raises(UsageError, match="choose from mixamo, smpl"):
         with_rig_names(SMPL22, "unreal")
+
+
+def test_sample_py_names_the_bones_of_its_bvh(tmp_path):
+    """``bvh_names=mixamo`` through sample.py's config and run; an unknown preset stops before sampling."""
+    from fixtures.in_process import run_entry, user_error
+
+    _, out = run_entry("sample", tmp_path, "checkpoint=shipped", "text=a person walks", "num_samples=1", "length=1",
+                       "steps=2", "export=[bvh]", "bvh_names=mixamo")  # fmt: skip
+    bvh = read_bvh(next(out.glob("*.bvh")))
+    assert "mixamorig:Hips" in bvh.joint_names and "mixamorig:LeftHand" in bvh.joint_names
+    assert "choose from mixamo, smpl" in user_error("sample", tmp_path / "bad", "checkpoint=shipped", "text=walk",
+                                                    "export=[bvh]", "bvh_names=unreal")  # fmt: skip
+    assert not list((tmp_path / "bad").rglob("*.npy"))
