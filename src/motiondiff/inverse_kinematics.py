@@ -179,7 +179,7 @@ def refine_rotations(
     root: np.ndarray,
     *,
     powers: tuple[float, ...] = (2.0, 8.0, 32.0),
-    iterations: int = 150,
+    iterations: int = 60,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Polish `solve_rotations`'s answer for joints whose bones are not rigid: local rotations (N, J, 4) and one
     length per bone (offsets (J, 3), directions kept) that bring forward kinematics close to `positions` at every

@@ -15,7 +15,7 @@ from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sa
 from motiondiff.cli.sample import cleanup_option, export_formats, slug
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
-from motiondiff.edit.foot_cleanup import clean_foot_skate
+from motiondiff.edit.cleanups import apply_cleanups, check_for_edit
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import check_formats_for, export_features
@@ -83,6 +83,7 @@ def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_SAMPLE)  # types and ranges before any work
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     formats, cleanup = export_formats(cfg), cleanup_option(cfg)
+    check_for_edit(cleanup)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
     check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"))
@@ -136,10 +137,10 @@ def run(cfg: DictConfig) -> Path:
 
 
 def save_edits(
-    out: Path, result: EditResult, motion: InputMotion, module, formats, condition, cleanup=None, rig_names=None
+    out: Path, result: EditResult, motion: InputMotion, module, formats, condition, cleanup=(), rig_names=None
 ) -> list[dict]:
     """The input and each edit as arrays and the ``formats`` (export.outputs); one results row per edit. With
-    ``cleanup="feet"`` the saved joints are foot-skate cleaned (kept frames and joints untouched; the model's joints
+    ``cleanup=("feet",)`` the saved joints are foot-skate cleaned (kept frames and joints untouched; the model's joints
     go to *_joints_raw.npy) and the row reports the sliding before and after."""
     fps = float(module.hparams.fps)
     rep = module.representation
@@ -151,17 +152,16 @@ def save_edits(
         stem = out / f"{result.kind}_{slug(condition)}_{k:02d}"
         files = {"joints": f"{stem}_joints.npy", "features": f"{stem}_features.npy",
                  "input_joints": f"{stem}_input_joints.npy"}  # fmt: skip
-        joints, feet = result.joints[k], None
-        if cleanup == "feet":
+        joints, cleaned = result.joints[k], {}
+        if cleanup:
             np.save(f"{stem}_joints_raw.npy", joints)
-            cleaned = clean_foot_skate(joints, rep.skeleton, fps, keep=result.kept_points(k))
-            joints, feet = cleaned.joints.astype(joints.dtype), cleaned.summary()
+            joints, cleaned = apply_cleanups(joints, rep.skeleton, fps, cleanup, keep=result.kept_points(k))
         np.save(files["joints"], joints)
         np.save(files["features"], result.features[k])
         np.save(files["input_joints"], result.input_joints[k])
         exports = export_features(stem, rep, result.features[k], fps, formats, title=title,
-                                  joints=joints if feet else None, rig_names=rig_names)  # fmt: skip
+                                  joints=joints if cleaned else None, rig_names=rig_names)  # fmt: skip
         rows.append({"index": k, **files, "video": exports.get("mp4", exports.get("gif")), "exports": exports,
                      "input_video": inputs.get("mp4", inputs.get("gif")), "input_exports": inputs,
-                     **edit_numbers(result, k, fps), **({"foot_cleanup": feet} if feet else {})})  # fmt: skip
+                     **edit_numbers(result, k, fps), **cleaned})  # fmt: skip
     return rows

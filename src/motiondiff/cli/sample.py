@@ -3,7 +3,8 @@ stick-figure videos, plus results.json with what each sample measurably does.
 
 Timed prompts, `prompts="[a person walks forward:4, a person waves:3]"` (or `action="[walk:4, wave:3]"`), make ONE
 long motion that follows them in order (`edit.long_motion`); `smooth_sigma=` applies vvMDM's temporal filter and
-`cleanup=feet` pins the feet during ground contacts (`edit.foot_cleanup`)."""
+`cleanup=bones` puts the joints on one fixed skeleton (`edit.rigid_bones`) and `cleanup=feet` pins the feet during
+ground contacts (`edit.foot_cleanup`)."""
 
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ from motiondiff.cli.common import (
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.data.preparing.captions import measure
 from motiondiff.data.representations.spec import bridge_from_spec
-from motiondiff.edit.foot_cleanup import clean_foot_skate
+from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
@@ -189,16 +190,9 @@ def export_formats(cfg: DictConfig) -> list[str]:
         raise UsageError(str(err)) from None
 
 
-def cleanup_option(cfg: DictConfig) -> str | None:
-    """``cleanup=``: "feet" (foot-skate cleanup of the saved joints) or null/none (off)."""
-    value = cfg.get("cleanup")
-    if value is None or (isinstance(value, str) and value.strip().lower() == "none"):
-        return None
-    if not isinstance(value, str) or value.strip().lower() != "feet":
-        raise UsageError(
-            f"cleanup={value!r}: choose cleanup=feet (pin the feet during ground contacts) or cleanup=none"
-        )
-    return "feet"
+def cleanup_option(cfg: DictConfig) -> tuple[str, ...]:
+    """``cleanup=``: the clean-ups of the saved joints (bones, feet; ``edit.cleanups``), checked before sampling."""
+    return parse_cleanup(cfg.get("cleanup"))
 
 
 def smoothing_sigma(cfg: DictConfig, module: MotionDiffusionModule | None = None) -> float | None:
@@ -239,7 +233,7 @@ def long_motion_settings(cfg, module, prompts: list, seconds: list[float]) -> tu
     return float(overlap), float(blend)
 
 
-def sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats, cleanup=None):
+def sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats, cleanup=()):
     """One long motion per sample through the timed prompts; returns the results.json entries."""
     overlap, blend = long_motion_settings(cfg, module, prompts, seconds)
     n = cfg.num_samples
@@ -280,13 +274,13 @@ def save_samples(
     formats,
     sigma: float | None = None,
     stem=None,
-    cleanup: str | None = None,
+    cleanup: tuple[str, ...] = (),
     title=None,
     rig_names: str | None = None,
 ) -> list[dict]:
     """Joints, features and the ``formats`` (export.outputs) per sample; with ``sigma`` the saved joints are the
     smoothed ones (the raw ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after;
-    with ``cleanup="feet"`` they are then foot-skate cleaned and the row reports the foot sliding before and after.
+    ``cleanup`` (``edit.cleanups``: bones, feet) then runs on them and the row holds each clean-up's report.
     ``title``: what the videos and viewer show (default the prompt; a long motion's (first frame, prompt) segments);
     ``rig_names``: bone names of the bvh/fbx/glb files (export.rig_names: smpl, mixamo)."""
     rep = module.representation
@@ -305,17 +299,16 @@ def save_samples(
             after = smoothness_of_joints(feature_joints, bridge.feature_skeleton)
             smoothing = {"sigma_frames": sigma, "smoothness_before": before, "smoothness_after": after,
                          "measured_on": "HumanML3D features of the joints, as evaluate.py"}  # fmt: skip
-        feet = None
-        if cleanup == "feet":
+        cleaned = {}
+        if cleanup:
             if sigma is None:
                 np.save(f"{stem_k}_joints_raw.npy", joints)
-            cleaned = clean_foot_skate(joints, rep.skeleton, fps)
-            joints, feet = cleaned.joints.astype(np.float32), cleaned.summary()
-            feature_joints = joints if bridge.identity else clean_foot_skate(feature_joints, bridge.feature_skeleton,
-                                                                             fps).joints  # fmt: skip
+            joints, cleaned = apply_cleanups(joints, rep.skeleton, fps, cleanup)
+            if not bridge.identity:  # the measured joints get the same clean-ups on their own skeleton
+                feature_joints = apply_cleanups(feature_joints, bridge.feature_skeleton, fps, cleanup)[0]
         np.save(f"{stem_k}_joints.npy", joints)
         np.save(f"{stem_k}_features.npy", f.astype(np.float32))
-        changed = sigma is not None or cleanup is not None
+        changed = sigma is not None or bool(cleanup)
         exports = export_features(stem_k, rep, f, fps, formats, title=title or prompt or "unconditioned",
                                   joints=joints if changed else None, rig_names=rig_names)  # fmt: skip
         facts = measure(feature_joints, fps)
@@ -330,7 +323,7 @@ def save_samples(
                 "mean_joint_speed": speed,
                 **asdict(facts),
                 **({"smoothing": smoothing} if smoothing else {}),
-                **({"foot_cleanup": feet} if feet else {}),
+                **cleaned,
             }  # fmt: skip
         )
     return rows

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
+from motiondiff.motion_checks import check_motion
 from motiondiff.rotations import any_perpendicular, qbetween, qrot
 from motiondiff.skeleton import Skeleton
 
@@ -234,14 +235,7 @@ def _repose_leg(out, joints, chain, segment, contact_pair, heel_fix, toe_fix, le
 
 
 def _check(joints: np.ndarray, skeleton: Skeleton, fps: float) -> np.ndarray:
-    joints = np.asarray(joints, dtype=np.float64)
-    if joints.ndim != 3 or joints.shape[1:] != (skeleton.num_joints, 3):
-        raise ValueError(f"foot cleanup: joints must have shape (frames, {skeleton.num_joints}, 3) for skeleton "
-                         f"{skeleton.name!r}, got {joints.shape}")  # fmt: skip
-    if not np.isfinite(joints).all():
-        raise ValueError("foot cleanup: joints contain NaN or Inf; the motion diverged, resample it")
-    if not (np.isfinite(fps) and fps > 0):
-        raise ValueError(f"foot cleanup: fps must be a positive number, got {fps}")
+    joints = check_motion(joints, skeleton, fps, "foot cleanup")
     if not all(skeleton.foot_joints):
         raise ValueError(f"foot cleanup: skeleton {skeleton.name!r} names no foot joints on one side")
     return joints

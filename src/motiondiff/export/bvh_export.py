@@ -28,6 +28,7 @@ import numpy as np
 from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
 from motiondiff.export.rig_names import with_rig_names
 from motiondiff.inverse_kinematics import fit_rest_offsets, solve_rotations
+from motiondiff.motion_checks import check_motion
 from motiondiff.rotations import matrix_to_quat, qfix, qnormalize
 from motiondiff.skeleton import Skeleton
 
@@ -72,9 +73,13 @@ def export_bvh(
     Otherwise the rotations are solved by inverse kinematics on `offsets`, by default the motion's own bone lengths
     and sibling arrangement (`fit_rest_offsets`), which makes the fit exact up to float precision for any motion of
     rigid bones. The file is written atomically (nothing is left behind on failure)."""
-    joints = _check_joints(joints, skeleton)
-    if not (np.isfinite(fps) and fps > 0):
-        raise ValueError(f"export_bvh: fps must be a positive number, got {fps}")
+    joints = check_motion(
+        joints,
+        skeleton,
+        fps,
+        "export_bvh",
+        "decode features first (Representation.decode_numpy) and pass one motion at a time",
+    )
     if not (np.isfinite(scale) and scale > 0):
         raise ValueError(f"export_bvh: scale must be a positive number (100 for a centimetre file), got {scale}")
     if (rotations is None) != (root is None):
@@ -138,23 +143,6 @@ def export_bvh_from_features(
             path, joints, skeleton, fps, rotations=rotations, root=features[:, :3], offsets=rig_offsets, scale=scale
         )
     return export_bvh(path, joints, skeleton, fps, offsets=offsets, scale=scale)
-
-
-def _check_joints(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
-    joints = np.asarray(joints, dtype=np.float64)
-    j = skeleton.num_joints
-    if joints.ndim != 3 or joints.shape[1:] != (j, 3) or len(joints) == 0:
-        raise ValueError(
-            f"export_bvh: joints must have shape (frames >= 1, {j}, 3) for skeleton {skeleton.name!r}, got "
-            f"{joints.shape}; decode features first (Representation.decode_numpy) and pass one motion at a time"
-        )
-    bad = ~np.isfinite(joints).all(axis=(1, 2))
-    if bad.any():
-        raise ValueError(
-            f"export_bvh: joints contain NaN or Inf in {int(bad.sum())} frame(s) (first: {int(np.argmax(bad))}); "
-            "the motion diverged, resample it or drop those frames"
-        )
-    return joints
 
 
 def _check_rotations(rotations, root, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:

@@ -14,6 +14,7 @@ import numpy as np
 
 from motiondiff.atomic import atomic_write
 from motiondiff.export.render import Title, _chain_color, camera_azimuth, head_joint, title_at
+from motiondiff.motion_checks import check_motion
 from motiondiff.skeleton import Skeleton
 
 __all__ = ["export_html"]
@@ -53,13 +54,7 @@ def export_html(
     import plotly.io as pio
 
     path = Path(path)
-    joints = np.asarray(joints, dtype=np.float64)
-    if joints.ndim != 3 or joints.shape[1:] != (skeleton.num_joints, 3) or len(joints) == 0:
-        raise ValueError(f"export_html: expected joints (frames >= 1, {skeleton.num_joints}, 3), got {joints.shape}")
-    if not np.isfinite(joints).all():
-        raise ValueError("export_html: joints contain NaN or Inf; the motion diverged, resample it")
-    if not (np.isfinite(fps) and fps > 0):
-        raise ValueError(f"export_html: fps must be a positive number, got {fps}")
+    joints = check_motion(joints, skeleton, fps, "export_html")
     if not path.parent.is_dir():
         raise NotADirectoryError(f"cannot write {path}: the folder {path.parent} does not exist")
 

@@ -36,6 +36,7 @@ from motiondiff.errors import UsageError
 from motiondiff.export.bvh_export import TWIST_HALF_LIFE_S, ExportReport
 from motiondiff.inverse_kinematics import fit_rest_offsets, refine_rotations, solve_rotations
 from motiondiff.kinematics import forward_kinematics
+from motiondiff.motion_checks import check_motion
 from motiondiff.rotations import matrix_to_quat, qnormalize, quat_to_rotvec, rotvec_to_quat
 from motiondiff.skeleton import SMPL22, SMPL24, Skeleton
 
@@ -89,14 +90,7 @@ def export_smpl(
     keep the worst joint as close as a fixed skeleton can (`refine_rotations`). The report's error is
     |FK(file) - joints| (metres) over frames and joints. Written atomically."""
     count = check_smpl_skeleton(skeleton)
-    joints = np.asarray(joints, dtype=np.float64)
-    if joints.ndim != 3 or joints.shape[1:] != (skeleton.num_joints, 3) or len(joints) == 0:
-        raise ValueError(f"export_smpl: joints must have shape (frames >= 1, {skeleton.num_joints}, 3), got "
-                         f"{joints.shape}; pass one motion at a time")  # fmt: skip
-    if not np.isfinite(joints).all():
-        raise ValueError("export_smpl: joints contain NaN or Inf; the motion diverged, resample it")
-    if not (np.isfinite(fps) and fps > 0):
-        raise ValueError(f"export_smpl: fps must be a positive number, got {fps}")
+    joints = check_motion(joints, skeleton, fps, "export_smpl")
     if (rotations is None) != (root is None):
         raise ValueError("export_smpl: pass both rotations and root (a rotation representation's output) or neither")
     if offsets is not None:

@@ -6,12 +6,13 @@ from __future__ import annotations
 import json
 import re
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from motiondiff.data.representations import Representation
+from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
 from motiondiff.skeleton import Skeleton
 
@@ -60,6 +61,15 @@ class MotionOutput:
                          "features": f"{stem}_features.npy", "exports": exports})  # fmt: skip
         (folder / "results.json").write_text(json.dumps({"info": self.info, "samples": rows}, indent=1, default=str))
         return rows
+
+    def cleaned(self, *cleanups: str) -> MotionOutput:
+        """These motions after the named clean-ups (``"bones"``: one fixed skeleton, so every exported file agrees
+        with the joints; ``"feet"``: feet pinned during ground contacts), in that order; what each did is in
+        ``info["cleanup"]`` (one dict per motion)."""
+        names = parse_cleanup(list(cleanups))
+        done = [apply_cleanups(j, self.skeleton, self.fps, names) for j in self.joints]
+        info = {**self.info, "joints_changed": True, "cleanup": [report for _, report in done]}
+        return replace(self, joints=[joints.astype(np.float32) for joints, _ in done], info=info)
 
     def to_bvh(self, i: int = 0) -> str:
         """The text of motion ``i`` as a BVH file (the model's rotations where it has them, else solved by IK)."""

