@@ -92,3 +92,48 @@ def test_a_file_whose_up_axis_cannot_be_decided_warns(files, tmp_path):
     res = _results(out)
     inputs = np.load(res["samples"][0]["input_joints"])
     assert res["input"]["up_axis"]["how"] == "forced" and (inputs[:, HEAD, 1] - inputs[:, PELVIS, 1]).min() > 0.4
+
+
+def amass_like(folder, joints) -> tuple:
+    """The clip as an AMASS file would hold it: SMPL parameters of its joints (the project's export=smpl), turned to
+    AMASS's Z-up, without the rest offsets (an AMASS file has only poses, trans, betas), at 20 fps; and a synthetic
+    SMPL body model whose rest joints are the export's (the real model is licence-restricted)."""
+    from fixtures.synthetic_smpl import write_synthetic_smpl
+    from scipy.spatial.transform import Rotation
+
+    from motiondiff.export import export_smpl
+
+    report = export_smpl(folder / "walk_smpl.npz", joints, SMPL22, 20.0)
+    with np.load(report.path) as f:
+        data = {k: f[k] for k in f.files}
+    to_z_up = Rotation.from_matrix(rotation_to_y_up("+z").T)
+    pelvis = data["rest_joints"][0]
+    poses = data["poses"].copy()
+    poses[:, :3] = (to_z_up * Rotation.from_rotvec(poses[:, :3])).as_rotvec()
+    trans = to_z_up.apply(data["trans"] + pelvis) - pelvis  # the pelvis turned about the origin
+    amass = folder / "walk_amass_z_up.npz"
+    np.savez(amass, poses=poses, trans=trans, betas=np.zeros(16), gender=np.array("neutral"),
+             mocap_framerate=np.array(20.0))  # fmt: skip
+    return amass, write_synthetic_smpl(folder / "SMPL_NEUTRAL.npz", rest_joints=data["rest_joints"])
+
+
+def test_an_amass_smpl_file_is_edited_upright_through_a_body_model(files, tmp_path):
+    from fixtures.in_process import user_error
+
+    data = load_split(embedded_data_root(), "test")
+    joints = data.arrays["joints"][data.clip_slice([str(c) for c in data.arrays["ids"]].index(CLIP_ID))]
+    amass, model = amass_like(tmp_path, joints)
+    _, out = run_entry("edit", tmp_path / "run", *EDIT, f"input={amass}", f"smpl_model={model}", "export=none")
+    res = _results(out)
+    row = res["samples"][0]
+    inputs, edited = np.load(row["input_joints"]), np.load(row["joints"])
+    assert res["input"]["up_axis"]["axis"] == "+z" and res["input"]["up_axis"]["decided"]
+    assert (edited[:, HEAD, 1] - edited[:, PELVIS, 1]).min() > 0.4 and row["kept_max_error_m"] <= 1e-5
+    # the same clip read from the y-up project export (which records its skeleton) gives the same input
+    from motiondiff.edit import load_input_motion
+    from motiondiff.pipelines import MotionPipeline
+
+    expected = load_input_motion(tmp_path / "walk_smpl.npz", MotionPipeline.from_pretrained("text").model).joints
+    assert np.abs(inputs - expected).max() <= 1e-4
+    message = user_error("edit", tmp_path / "no_model", *EDIT, f"input={amass}")
+    assert "holds SMPL parameters (poses, trans, betas) but not the skeleton" in message and "smpl_model=" in message

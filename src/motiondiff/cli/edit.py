@@ -94,7 +94,8 @@ def run(cfg: DictConfig) -> Path:
         data_root = Path(cfg.data) if cfg.data else training_data_root(module, cfg.paths.data_dir, cfg.paths.cache_dir)
         length = None if cfg.length is None else frames_from_seconds(float(cfg.length), fps)
         motion = load_input_motion(cfg.input, module, data_root=data_root, start=frames_from_seconds(cfg.start, fps),
-                                   frames=length, up_axis=str(cfg.get("up_axis", "auto")))  # fmt: skip
+                                   frames=length, up_axis=str(cfg.get("up_axis", "auto")),
+                                   smpl_model=cfg.get("smpl_model"))  # fmt: skip
         if motion.up is not None:
             print(f"up axis of {cfg.input}: {motion.up.describe()}"
                   + ("" if motion.up.axis == "+y" else ", turned to y up"))  # fmt: skip

@@ -59,14 +59,17 @@ def load_input_motion(
     start: int = 0,
     frames: int | None = None,
     up_axis: str = "auto",
+    smpl_model: str | os.PathLike | None = None,
 ) -> InputMotion:
     """The motion to edit, encoded in the model's representation.
 
     ``source``: a ``.bvh`` file (prepared like the dataset: joint map to SMPL-22, 20 fps, canonical placement, rig
     rotations for rotation representations), a ``.npy`` of joints (frames, J, 3) in metres at the model's fps on
     the representation's skeleton (hml263/kit251/jp only; a ``.npz`` holding such an array as ``joints`` or as its
-    only array), or a dataset clip id, ``split:clip_id`` or a bare id looked up in ``data_root`` (default: the data
-    the model was trained on).
+    only array), an ``.npz`` of SMPL parameters (AMASS, export=smpl; `data.formats.smpl_params`: its 22 body joints,
+    prepared like a BVH file; ``smpl_model``: the SMPL body model .npz for files that do not record their skeleton),
+    or a dataset clip id, ``split:clip_id`` or a bare id looked up in ``data_root`` (default: the data the model was
+    trained on).
 
     ``up_axis``: which way is up in a file: "auto" detects it (the axis the head sits above the feet along, see
     `motiondiff.data.formats.up_axis`; a file it cannot decide warns with `UpAxisWarning` and is read as Y-up), or
@@ -86,8 +89,11 @@ def load_input_motion(
     if path.suffix.lower() in (".bvh", ".npy", ".npz"):
         if path.is_dir() or not path.is_file():
             raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path")
-        load = _bvh_features if path.suffix.lower() == ".bvh" else _npy_features
-        features, window, total, up = load(path, module, start, frames, up_axis)
+        if path.suffix.lower() == ".bvh" or _holds_smpl_params(path):
+            motion, units = _read_motion(path, smpl_model)
+            features, window, total, up = _bvh_features(path, motion, units, module, start, frames, up_axis)
+        else:
+            features, window, total, up = _npy_features(path, module, start, frames, up_axis)
         return _input_motion(module, features, text, window, total, {"up": up})
     features, info = _dataset_features(text, module, data_root)
     return _dataset_window(module, features, text, start, frames, info)
@@ -230,10 +236,35 @@ def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     return qrot(np.broadcast_to(turn, joints.shape[:-1] + (4,)), joints + shift)
 
 
-def _bvh_features(path: Path, module, start: int, frames: int | None, up_axis: str = "auto"):
-    """Features of a window of a BVH file, turned to Y-up (`bvh_up_axis`), then prepared exactly as `prepare`
-    prepares a clip cut to a window."""
+def _holds_smpl_params(path: Path) -> bool:
+    from motiondiff.data.formats.smpl_params import is_smpl_params
+
+    if path.suffix.lower() != ".npz":
+        return False
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return is_smpl_params(data.files)
+    except (ValueError, OSError, EOFError) as err:
+        raise EditError(f"{path}: not a readable .npz array ({err})") from None
+
+
+def _read_motion(path: Path, smpl_model) -> tuple[object, float | None]:
+    """A BVH file, or an SMPL parameter file's body joints, as a BVHMotion; with its units when they are known
+    (SMPL: metres; a BVH's are guessed from its skeleton)."""
     from motiondiff.data.formats.bvh import BVHError, read_bvh
+    from motiondiff.data.formats.smpl_params import SmplParamsError, load_smpl_body, read_smpl_params
+
+    try:
+        if path.suffix.lower() == ".bvh":
+            return read_bvh(path), None
+        return read_smpl_params(path, None if smpl_model is None else load_smpl_body(smpl_model)), 1.0
+    except (BVHError, SmplParamsError) as err:
+        raise EditError(str(err)) from None
+
+
+def _bvh_features(path: Path, motion, units, module, start: int, frames: int | None, up_axis: str = "auto"):
+    """Features of a window of a BVH-like motion (a BVH file, SMPL parameters), turned to Y-up (`bvh_up_axis`),
+    then prepared exactly as `prepare` prepares a clip cut to a window."""
     from motiondiff.data.formats.up_axis import bvh_up_axis
     from motiondiff.data.preparing.processing import TARGET_FPS, ClipError, process_motion
 
@@ -246,12 +277,9 @@ def _bvh_features(path: Path, module, start: int, frames: int | None, up_axis: s
         )
     if float(module.hparams.fps) != TARGET_FPS:
         raise EditError(f"BVH input is prepared at {TARGET_FPS:g} fps, but this model runs at {module.hparams.fps} fps")
-    try:
-        motion = read_bvh(path)
-    except BVHError as err:
-        raise EditError(str(err)) from None
-    joint_map = _bvh_joint_map(module, motion, path)
-    up = bvh_up_axis(motion, joint_map, up_axis=up_axis)
+    joint_map = _bvh_joint_map(module, motion, path, units)
+    smpl = path.suffix.lower() != ".bvh"  # an SMPL parameter file: its rest pose is the Y-up template, no evidence
+    up = bvh_up_axis(motion, joint_map, up_axis=up_axis, rest_pose=not smpl)
     if up.axis != "+y":
         motion = motion.rotated(up.matrix)  # a change of basis: offsets, End Sites and rotations turn with it
     try:
@@ -276,9 +304,9 @@ def _bvh_features(path: Path, module, start: int, frames: int | None, up_axis: s
     return features, window, total, up
 
 
-def _bvh_joint_map(module, motion, path: Path):
+def _bvh_joint_map(module, motion, path: Path, units: float | None = None):
     """The joint map the model's dataset was prepared with when the file has its joints, else one inferred from
-    the joint names (as `prepare bvh --joint-map auto`)."""
+    the joint names (as `prepare bvh --joint-map auto`; `units`: metres per file unit when known)."""
     from motiondiff.data.formats.joint_map import JointMap
 
     spec = module.hparams.get("representation") or {}
@@ -287,7 +315,8 @@ def _bvh_joint_map(module, motion, path: Path):
         if known.source_joints() <= set(motion.joint_names):
             return known
     try:
-        return JointMap.infer(motion.joint_names, motion.parents, offsets=motion.offsets, source=f"auto({path.name})")
+        return JointMap.infer(motion.joint_names, motion.parents, offsets=motion.offsets, source=f"auto({path.name})",
+                              units_to_metres=units)  # fmt: skip
     except ValueError as err:
         raise EditError(f"{path}: cannot map its joints to SMPL-22: {err}") from None
 

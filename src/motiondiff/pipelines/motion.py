@@ -146,19 +146,21 @@ class MotionPipeline:
 
     # ---- editing ------------------------------------------------------------------------------------------------
     def inbetween(self, motion, prompt=None, *, prefix=None, suffix=None, num_samples: int = 1, seed: int = 0,
-                  up_axis: str = "auto", **sampling: Any) -> MotionOutput:  # fmt: skip
+                  up_axis: str = "auto", smpl_model=None, **sampling: Any) -> MotionOutput:  # fmt: skip
         """Keep the first ``prefix`` and last ``suffix`` of ``motion`` (frames, or a fraction; default 25% each) and
         generate the frames between, following ``prompt``. ``motion``: a .bvh/.npy/.npz path, a dataset clip id, or
         a MotionOutput (its first motion). ``up_axis``: a file's up axis, "auto" (detected) or forced ("z", "-z",
-        ...; see `motiondiff.edit.load_input_motion`)."""
-        source = self._input(motion, up_axis)
+        ...; see `motiondiff.edit.load_input_motion`); ``smpl_model``: the SMPL body model .npz an SMPL parameter
+        file (AMASS) needs for its skeleton."""
+        source = self._input(motion, up_axis, smpl_model)
         return self._edited(_inbetween, source, prompt, dict(prefix=prefix, suffix=suffix), num_samples, seed, sampling)
 
     def edit_parts(self, motion, prompt=None, *, parts="upper_body", num_samples: int = 1, seed: int = 0,
-                   up_axis: str = "auto", **sampling: Any) -> MotionOutput:  # fmt: skip
+                   up_axis: str = "auto", smpl_model=None, **sampling: Any) -> MotionOutput:  # fmt: skip
         """Regenerate ``parts`` of ``motion`` (a preset such as "upper_body" or joint names) from ``prompt`` and keep
-        the rest of the body as it is, over every frame (MDM's body-part editing). ``up_axis`` as in `inbetween`."""
-        source = self._input(motion, up_axis)
+        the rest of the body as it is, over every frame (MDM's body-part editing). ``up_axis``, ``smpl_model`` as in
+        `inbetween`."""
+        source = self._input(motion, up_axis, smpl_model)
         try:
             kept = _complement_parts(self.model.representation.skeleton, parts)
         except EditError as err:
@@ -178,7 +180,7 @@ class MotionPipeline:
             list(result.joints), list(result.features), [self._label(c) for c in result.conditions], info
         )
 
-    def _input(self, motion, up_axis: str = "auto") -> InputMotion:
+    def _input(self, motion, up_axis: str = "auto", smpl_model=None) -> InputMotion:
         if isinstance(motion, MotionOutput):  # its own features, as made (canonical placement, any representation)
             if motion.representation.name != self.model.representation.name:
                 raise UsageError(f"this motion is in {motion.representation.name} features; the model edits "
@@ -188,11 +190,11 @@ class MotionPipeline:
             joints = self.model.representation.decode_numpy(feats)
             return InputMotion(feats, joints, "generated", self.fps, (0, n), len(motion.features[0]),
                                captions=[motion.prompts[0]] if motion.prompts[0] else [])  # fmt: skip
-        return self._load(motion, up_axis)
+        return self._load(motion, up_axis, smpl_model)
 
-    def _load(self, source, up_axis: str = "auto") -> InputMotion:
+    def _load(self, source, up_axis: str = "auto", smpl_model=None) -> InputMotion:
         try:
-            return load_input_motion(source, self.model, up_axis=up_axis)
+            return load_input_motion(source, self.model, up_axis=up_axis, smpl_model=smpl_model)
         except (EditError, ValueError) as err:
             raise UsageError(str(err)) from None
 

@@ -228,9 +228,12 @@ def undecided(source: str, reason: str, motion_axis=None, rest_axis=None, share=
     return UpAxis("+y", False, "undecided", motion_axis, rest_axis, float(share), reason)
 
 
-def bvh_up_axis(motion: BVHMotion, joint_map: JointMap, *, up_axis: str = "auto", warn: bool = True) -> UpAxis:
+def bvh_up_axis(
+    motion: BVHMotion, joint_map: JointMap, *, up_axis: str = "auto", warn: bool = True, rest_pose: bool = True
+) -> UpAxis:
     """`detect_up_axis` on a BVH's SMPL-22 joints (through `joint_map`): head = SMPL's head, feet = ankles and toes;
-    the rest pose is the hierarchy with every rotation zero (OFFSETs only)."""
+    the rest pose is the hierarchy with every rotation zero (OFFSETs only). `rest_pose=False`: the rest pose is no
+    evidence (SMPL parameter files stand in SMPL's Y-up template whatever their data's up axis)."""
     from motiondiff.kinematics import forward_kinematics
     from motiondiff.skeleton import SMPL22
 
@@ -245,4 +248,4 @@ def bvh_up_axis(motion: BVHMotion, joint_map: JointMap, *, up_axis: str = "auto"
     world = forward_kinematics(motion.rotations[every], motion.translations[every], motion.parents)[0]
     mapped = joint_map.apply(world, motion.joint_names, to_metres=False)
     rest_mapped = joint_map.apply(rest, motion.joint_names, to_metres=False)
-    return detect_up_axis(mapped, head, feet, rest=rest_mapped, source=motion.source, warn=warn)
+    return detect_up_axis(mapped, head, feet, rest=rest_mapped if rest_pose else None, source=motion.source, warn=warn)
