@@ -2,7 +2,7 @@
 arXiv 2211.01095): a multistep solver of the probability-flow ODE in data (x̂0) prediction, for few-step sampling.
 
 With α_t = √ᾱ_t, σ_t = √(1 − ᾱ_t) and λ_t = log(α_t/σ_t), the ODE's exact solution from s to t (λ rises) is
-x_t = (σ_t/σ_s) x_s + σ_t ∫_{λ_s}^{λ_t} e^λ x̂0(λ) dλ (paper, eq. 9). With h = λ_t − λ_s and u = λ − λ_s,
+x_t = (σ_t/σ_s) x_s + σ_t ∫_{λ_s}^{λ_t} e^λ x̂0(λ) dλ (variation of constants in λ). With h = λ_t − λ_s and u = λ − λ_s,
 σ_t ∫ e^λ u^k/k! dλ = α_t c_k(h) with c_0 = 1 − e^{−h} and c_k = h^k/k! − c_{k−1}, so a Taylor expansion of x̂0 in λ
 gives x_t = (σ_t/σ_s) x_s + α_t Σ_k c_k x̂0^{(k)}(λ_s). Multistep solvers estimate the derivatives from the x̂0 of
 earlier steps, one network call per step: order 1 keeps k = 0 (DDIM with η = 0); order 2 is Algorithm 2 (2M), x̂0
