@@ -1,5 +1,6 @@
 """Diffusion math, independent of motion: schedules, the Gaussian process, samplers and guidance."""
 
+from motiondiff.diffusion.dpm_solver import dpmpp_sample
 from motiondiff.diffusion.guidance import classifier_free_guidance, guided_model_fn, overwrite_known
 from motiondiff.diffusion.process import PREDICTIONS, WEIGHTINGS, GaussianDiffusion, masked_mean_per_sample
 from motiondiff.diffusion.samplers import ddim_coefficients, ddim_sample, ddpm_sample, select_timesteps
@@ -14,6 +15,7 @@ __all__ = [
     "ddim_coefficients",
     "ddim_sample",
     "ddpm_sample",
+    "dpmpp_sample",
     "guided_model_fn",
     "make_betas",
     "masked_mean_per_sample",

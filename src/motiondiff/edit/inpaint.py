@@ -33,7 +33,7 @@ from motiondiff.diffusion.guidance import overwrite_known, reconstruction_guidan
 
 EditMode = Literal["overwrite", "repaint"]
 EDIT_MODES = ("overwrite", "repaint")
-SAMPLERS = ("ddim", "ddpm")
+SAMPLERS = ("ddim", "ddpm", "dpmpp")
 
 
 @dataclass(frozen=True)
@@ -72,6 +72,8 @@ class SamplingOptions:
             raise error(f"steps must be between 1 and the model's {module.diffusion.num_steps}, got {self.steps}")
         if int(self.resample) != self.resample or self.resample < 1:
             raise error(f"resample must be a whole number >= 1 (1: no RePaint resampling), got {self.resample}")
+        if self.sampler == "dpmpp" and self.resample != 1:
+            raise error(f"sampler dpmpp has no RePaint resampling (resample={self.resample}); use sampler=ddim for it")
         hold = self.hold_from
         if isinstance(hold, bool) or not isinstance(hold, int | float) or not 0 < hold <= 1:
             raise error(

@@ -14,7 +14,7 @@ import numpy as np
 import torch
 
 from motiondiff.data.representations.spec import representation_from_spec
-from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, guided_model_fn, make_betas
+from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, dpmpp_sample, guided_model_fn, make_betas
 from motiondiff.diffusion.thresholding import make_threshold
 from motiondiff.edit.masks import part_keep
 from motiondiff.lit.known_masks import random_known_keep
@@ -22,6 +22,9 @@ from motiondiff.losses import GeometricLoss
 from motiondiff.models.backbones import build_backbone
 from motiondiff.models.conditioning import build_condition
 from motiondiff.models.denoiser import MDMDenoiser
+
+# The samplers ``sample`` knows and each one's default steps (None: every step of the chain).
+SAMPLER_STEPS = {"ddim": 50, "ddpm": None, "dpmpp": 10}
 
 
 class MotionDiffusionModule(L.LightningModule):
@@ -220,7 +223,8 @@ class MotionDiffusionModule(L.LightningModule):
         known: torch.Tensor | None = None,
         keep: torch.Tensor | None = None,
     ) -> torch.Tensor:
-        """Generate normalised features (B, max(lengths), D); frames past each length are padding. ``resample``:
+        """Generate normalised features (B, max(lengths), D); frames past each length are padding. ``sampler``: one of
+        ``SAMPLER_STEPS`` (``steps=None``: its default; ``eta`` is DDIM's only). ``resample``:
         RePaint's repeats per step for editing; ``x0_hook``, ``xt_hook``, ``x0_guide``: see ``diffusion.samplers``.
         ``known``/``keep`` (B, N, D): the clean known part of an edit, read by models trained with
         ``known_conditioning`` (ignored by others)."""
@@ -241,7 +245,7 @@ class MotionDiffusionModule(L.LightningModule):
         clip = make_threshold(self.clip_rule, self.x0_low, self.x0_high, mask=mask)
         if sampler == "ddim":
             return ddim_sample(
-                self.diffusion, fn, shape, steps=steps or 50, eta=eta, generator=generator,
+                self.diffusion, fn, shape, steps=steps or SAMPLER_STEPS["ddim"], eta=eta, generator=generator,
                 x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress, resample=resample,
                 device=self.device, clip_x0=clip,
             )  # fmt: skip
@@ -250,7 +254,13 @@ class MotionDiffusionModule(L.LightningModule):
                 self.diffusion, fn, shape, steps=steps, generator=generator, x0_hook=x0_hook, xt_hook=xt_hook,
                 x0_guide=x0_guide, progress=progress, resample=resample, device=self.device, clip_x0=clip,
             )  # fmt: skip
-        raise ValueError(f"unknown sampler {sampler!r}; choose ddpm or ddim")
+        if sampler == "dpmpp":  # DPM-Solver++(2M); eta is unused (the solver is deterministic)
+            return dpmpp_sample(
+                self.diffusion, fn, shape, steps=steps or SAMPLER_STEPS["dpmpp"], generator=generator,
+                x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress, resample=resample,
+                device=self.device, clip_x0=clip,
+            )  # fmt: skip
+        raise ValueError(f"unknown sampler {sampler!r}; choose one of {', '.join(SAMPLER_STEPS)}")
 
     def set_clip_rule(self, rule: str | None) -> None:
         """Sample with another safe-x̂0 rule (none | static | dynamic) than the one the model was trained with."""

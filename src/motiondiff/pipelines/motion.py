@@ -26,6 +26,7 @@ from motiondiff.edit.masks import EditError
 from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
+from motiondiff.lit.diffusion import SAMPLER_STEPS
 from motiondiff.lit.generation import fitted_steps, generate_features
 from motiondiff.lit.loading import load_model
 from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
@@ -97,8 +98,9 @@ class MotionPipeline:
     ) -> MotionOutput:
         """``num_samples`` motions per prompt: texts (text models), action names or ids (action models) or None
         (unconditioned); one prompt or a list. ``seconds``: one length, or one per prompt. ``guidance``: the
-        classifier-free guidance scale (None: the model's default); ``steps``: sampler steps (None: 50 for DDIM, the
-        whole chain for DDPM, at most the model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
+        classifier-free guidance scale (None: the model's default); ``sampler``: ddim, ddpm or dpmpp (DPM-Solver++(2M));
+        ``steps``: sampler steps (None: 50 for DDIM, 10 for DPM-Solver++, the whole chain for DDPM, at most the
+        model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
         prompts = self._prompts(prompt)
         lengths = [self._frames(s) for s in self._per_prompt(seconds, len(prompts), "seconds")]
         n = self._count(num_samples)
@@ -243,9 +245,9 @@ class MotionPipeline:
         guidance = self.model.default_guidance if guidance is None else guidance
         if isinstance(guidance, bool) or not isinstance(guidance, int | float) or not 0 <= guidance < float("inf"):
             raise UsageError(f"guidance must be a number >= 0, got {guidance!r}")
-        if sampler not in ("ddim", "ddpm"):
-            raise UsageError(f"sampler must be 'ddim' or 'ddpm', got {sampler!r}")
-        steps = fitted_steps(self.model, steps, 50 if sampler == "ddim" else None)
+        if sampler not in SAMPLER_STEPS:
+            raise UsageError(f"sampler must be one of {', '.join(SAMPLER_STEPS)}, got {sampler!r}")
+        steps = fitted_steps(self.model, steps, SAMPLER_STEPS[sampler])
         return {"guidance": float(guidance), "sampler": sampler, "steps": steps, "eta": float(eta)}
 
 

@@ -109,11 +109,12 @@ def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tupl
     """A conditioned model's samples of its ∅ condition (classifier-free guidance's unconditional half), made and
     decoded as the pipeline makes its motions."""
     from motiondiff.edit.smoothing import smooth_joints
+    from motiondiff.lit.diffusion import SAMPLER_STEPS
     from motiondiff.lit.generation import fitted_steps, generate_features
 
     model = pipe.model
     frames = torch.full((n,), round(seconds * pipe.fps))
-    steps = fitted_steps(model, steps, 50 if sampler == "ddim" else None)
+    steps = fitted_steps(model, steps, SAMPLER_STEPS.get(sampler))
     generator = torch.Generator(device=model.device).manual_seed(int(seed))
     feats = generate_features(model, [None] * n, frames, generator=generator, sampler=sampler, steps=steps)
     joints = [smooth_joints(model.representation.decode_numpy(f).astype(np.float32), smooth_sigma) for f in feats]

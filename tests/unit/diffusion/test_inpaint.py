@@ -16,7 +16,7 @@ def module():
 
 
 @pytest.mark.parametrize("mode", ["overwrite", "repaint"])
-@pytest.mark.parametrize("sampler", ["ddim", "ddpm"])
+@pytest.mark.parametrize("sampler", ["ddim", "ddpm", "dpmpp"])
 def test_known_part_is_kept_and_the_rest_generated(module, mode, sampler):
     b, n, d = 2, 30, module.hparams.feature_dim
     known = torch.randn(b, n, d, generator=torch.Generator().manual_seed(1))

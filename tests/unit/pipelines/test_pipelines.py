@@ -32,6 +32,11 @@ def test_text_to_motion_and_reproducible_seeds(pipe):
     assert out.info["steps"] == 5 and out.info["guidance"] == pipe.model.default_guidance
 
 
+def test_dpmpp_sampler_with_its_default_steps(pipe):
+    out = pipe("a person walks forward", seconds=1, sampler="dpmpp")
+    assert out.info["sampler"] == "dpmpp" and out.info["steps"] == 10 and np.isfinite(out.joints[0]).all()
+
+
 def test_save_and_export(pipe, tmp_path):
     out = pipe("a person walks forward", seconds=2, steps=3)
     rows = out.save(tmp_path / "walk", formats=["bvh", "html"])
