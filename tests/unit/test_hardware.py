@@ -1,4 +1,5 @@
-"""The CPU presets resolve to a precision this CPU runs fast; device=auto picks the GPU where there is one."""
+"""The CPU presets resolve to a precision this CPU runs fast; sampling's precision=auto picks bf16 only where it
+measured faster; device=auto picks the GPU where there is one."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ def test_cpu_presets_follow_the_cpu():
     with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
         train = compose("train", overrides=["trainer=cpu"])
         evaluate = compose("evaluate")
-    assert train.trainer.precision == expected and evaluate.precision == expected
+    assert train.trainer.precision == expected and evaluate.precision == "auto"
     # what train.py hands to Lightning: resolved, not the interpolation string
     from omegaconf import OmegaConf
 
@@ -37,3 +38,27 @@ def test_device_auto_is_the_gpu_where_there_is_one(monkeypatch):
         resolve_device("cuda:0")
     monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
     assert resolve_device("auto") == "cuda"
+
+
+def test_sampling_precision_auto_follows_what_measured_faster(monkeypatch):
+    from motiondiff import hardware
+    from motiondiff.errors import UsageError
+
+    assert hardware.inference_precision("32") == "32-true" and hardware.inference_precision("FP32") == "32-true"
+    assert hardware.inference_precision("bf16") == "bf16-mixed" == hardware.inference_precision("bf16-mixed")
+    with pytest.raises(UsageError, match=r"precision='half': choose auto .*, bf16 or 32"):
+        hardware.inference_precision("half")
+    monkeypatch.setattr(hardware, "cpu_has_fast_bf16", lambda: False)
+    assert hardware.inference_precision("auto", "cpu", (160, 128, 256)) == "32-true"
+    assert hardware.bf16_matmul_is_faster.__wrapped__(160, 128, 256) is False  # not even timed without native bf16
+    monkeypatch.setattr(hardware, "cpu_has_fast_bf16", lambda: True)
+    for faster, expected in ((True, "bf16-mixed"), (False, "32-true")):
+        monkeypatch.setattr(hardware, "bf16_matmul_is_faster", lambda *shape, f=faster: f)
+        assert hardware.inference_precision("auto", "cpu", (160, 128, 256)) == expected
+
+
+def test_the_pipeline_records_the_precision_it_sampled_in():
+    from motiondiff.pipelines import MotionPipeline
+
+    out = MotionPipeline.from_pretrained("text", precision="32")("a person walks", seconds=1, steps=2)
+    assert out.info["precision"] == "32-true"

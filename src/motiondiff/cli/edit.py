@@ -19,8 +19,9 @@ from motiondiff.edit.cleanups import apply_cleanups, check_for_edit
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import check_formats_for, export_features
-from motiondiff.hardware import resolve_device
+from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, check_text
+from motiondiff.lit.generation import feed_forward_shape, sampling_precision
 from motiondiff.lit.loading import load_model as load_module
 from motiondiff.studies.editing import edit_numbers
 
@@ -108,12 +109,14 @@ def run(cfg: DictConfig) -> Path:
                     "reconstruction": cfg.reconstruction, "progress": True}  # fmt: skip
         what = condition or "unconditioned"
         print(f"{cfg.kind} ({cfg.mode}) of {cfg.input} ({motion.num_frames} frames) x {cfg.num_samples}: {what!r}")
-        if cfg.kind == "inbetween":
-            result = inbetween(module, motion, condition, prefix=_kept(cfg, "prefix", fps),
-                               suffix=_kept(cfg, "suffix", fps), close_root=bool(cfg.close_root),
-                               boundary_blend=cfg.boundary_blend, **sampling)  # fmt: skip
-        else:
-            result = edit_parts(module, motion, _parts(cfg), condition, **sampling)
+        shape = feed_forward_shape(module, int(cfg.num_samples), int(module.hparams.max_frames))
+        with sampling_precision(module, inference_precision(cfg.get("precision", "auto"), cfg.device, shape)):
+            if cfg.kind == "inbetween":
+                result = inbetween(module, motion, condition, prefix=_kept(cfg, "prefix", fps),
+                                   suffix=_kept(cfg, "suffix", fps), close_root=bool(cfg.close_root),
+                                   boundary_blend=cfg.boundary_blend, **sampling)  # fmt: skip
+            else:
+                result = edit_parts(module, motion, _parts(cfg), condition, **sampling)
     except EditError as err:
         raise UsageError(str(err)) from None
     out = Path(HydraConfig.get().runtime.output_dir)

@@ -34,7 +34,8 @@ from motiondiff.eval.protocol import (
     multimodality,
     replication_metrics,
 )
-from motiondiff.hardware import resolve_device
+from motiondiff.hardware import inference_precision, resolve_device
+from motiondiff.lit.generation import feed_forward_shape
 
 log = logging.getLogger(__name__)
 PROTOCOL = {"text": "text", "action": "action", "none": "unconstrained"}
@@ -216,6 +217,8 @@ def run(cfg: DictConfig) -> Path:
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
     _check(cfg, module)  # before any work: bad settings fail at once
+    shape = feed_forward_shape(module, int(cfg.batch_size), int(module.hparams.max_frames))
+    cfg.precision = inference_precision(cfg.precision, cfg.device, shape)  # auto: bf16 where measured faster
     rep = (module.hparams.get("representation") or {}).get("name")
     overrides = {"representation": rep} if rep else {}
     if module.hparams.get("max_frames"):  # clips cropped as the model trained (it never made longer motion)

@@ -35,10 +35,10 @@ from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
-from motiondiff.hardware import resolve_device
+from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.diffusion import MotionDiffusionModule
-from motiondiff.lit.generation import generate_features
+from motiondiff.lit.generation import feed_forward_shape, generate_features, sampling_precision
 from motiondiff.lit.loading import load_model
 from motiondiff.studies.behaviour import mean_joint_speed
 
@@ -157,11 +157,15 @@ def run(cfg: DictConfig) -> Path:
     steps = sampling_steps(cfg, module)
     apply_clip_x0(cfg, module)
     generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
+    shape = feed_forward_shape(module, int(cfg.num_samples), frames or int(module.hparams.max_frames))
+    precision = inference_precision(cfg.get("precision", "auto"), cfg.device, shape)
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "steps": steps,
+               "precision": precision,
                "clip_x0": module.clip_rule}  # fmt: skip
     if seconds is not None:
-        summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats,
-                                   cleanup))  # fmt: skip
+        with sampling_precision(module, precision):
+            summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats,
+                                       cleanup))  # fmt: skip
         (out / "results.json").write_text(json.dumps(summary, indent=1))
         print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
         return out
@@ -171,7 +175,7 @@ def run(cfg: DictConfig) -> Path:
         n = int(cfg.num_samples)
         feats = generate_features(module, [prompt] * n, torch.full((n,), frames), batch_size=n, generator=generator,
                                   guidance=guidance, sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta),
-                                  progress=True)  # fmt: skip
+                                  progress=True, precision=precision)  # fmt: skip
         feats = np.stack(feats)
         results += save_samples(
             out, prompt, feats, module, formats, sigma, cleanup=cleanup, rig_names=cfg.get("bvh_names")

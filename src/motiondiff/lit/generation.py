@@ -26,6 +26,19 @@ def fitted_steps(module, steps, default: int | None) -> int | None:
     return None if default is None else min(int(default), num_steps)
 
 
+def feed_forward_shape(module, motions: int, frames: int) -> tuple[int, int, int]:
+    """(rows, d_model, ff_size) of the denoiser's feed-forward matmul when sampling `motions` guided motions of
+    `frames` frames (two streams each): what `hardware.inference_precision` times to choose bf16 or not."""
+    arch = module.hparams.model
+    return (2 * motions * frames, int(arch.get("d_model", 512)), int(arch.get("ff_size", 1024)))
+
+
+def sampling_precision(module, precision: str = "32-true"):
+    """The context the denoiser samples in: bf16 autocast for "bf16-mixed" (as such models train; the sampler's own
+    arithmetic stays float32), full precision for anything else."""
+    return torch.autocast(module.device.type, dtype=torch.bfloat16, enabled=str(precision).startswith("bf16"))
+
+
 @torch.inference_mode()
 def generate_features(
     module,
@@ -45,14 +58,13 @@ def generate_features(
     lengths = torch.as_tensor(lengths)
     if len(conditions) != len(lengths):
         raise ValueError(f"{len(conditions)} conditions for {len(lengths)} lengths")
-    bf16 = str(precision).startswith("bf16")
     order = torch.argsort(lengths, descending=True, stable=True)  # equal lengths keep their order
     results: dict[int, np.ndarray] = {}
     for s in range(0, len(order), batch_size):
         idx = order[s : s + batch_size].tolist()
         cond = condition_batch(module, [conditions[i] for i in idx])
         lens = lengths[idx]
-        with torch.autocast(module.device.type, dtype=torch.bfloat16, enabled=bf16):
+        with sampling_precision(module, precision):
             feats = module.sample(cond, lens, generator=generator, **sampling)
         feats = module.denormalise(feats.float()).cpu().numpy()
         for row, i in enumerate(idx):

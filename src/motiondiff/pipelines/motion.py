@@ -25,9 +25,10 @@ from motiondiff.edit.long_motion import generate_long
 from motiondiff.edit.masks import EditError
 from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.errors import UsageError
+from motiondiff.hardware import inference_precision
 from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.diffusion import SAMPLER_STEPS
-from motiondiff.lit.generation import fitted_steps, generate_features
+from motiondiff.lit.generation import feed_forward_shape, fitted_steps, generate_features, sampling_precision
 from motiondiff.lit.loading import load_model
 from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
 from motiondiff.pipelines.output import MotionOutput
@@ -54,14 +55,19 @@ def resolve_model(name_or_path: str | Path) -> Path:
 class MotionPipeline:
     """Generate (``__call__``), edit (``inbetween``, ``edit_parts``) and chain (``long``) motion with one model."""
 
-    def __init__(self, model, source: str = ""):
+    def __init__(self, model, source: str = "", precision: str = "auto"):
         self.model = model.eval()
         self.source = source
+        shape = feed_forward_shape(self.model, 1, int(self.model.hparams.max_frames))  # one motion, as most calls
+        self.precision = inference_precision(precision, str(self.model.device), shape)
 
     @classmethod
-    def from_pretrained(cls, name_or_path: str | Path = "text", device: str = "cpu") -> MotionPipeline:
+    def from_pretrained(cls, name_or_path: str | Path = "text", device: str = "cpu", precision: str = "auto"):
+        """A released model by name ("text", "action", ...) or a .ckpt/.safetensors path. ``precision``: "auto"
+        samples in bf16 where the hardware runs it natively (measured: docs/results/bf16_inference.md), "32" in
+        full precision, "bf16" forced."""
         path = resolve_model(name_or_path)
-        return cls(load_model(path, device), str(path))
+        return cls(load_model(path, device), str(path), precision)
 
     # ---- what the model does ------------------------------------------------------------------------------------
     @property
@@ -108,12 +114,13 @@ class MotionPipeline:
         conditions = [p for p in prompts for _ in range(n)]
         frames = torch.tensor([f for f in lengths for _ in range(n)])
         generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
-        feats = generate_features(self.model, conditions, frames, batch_size=64, generator=generator, **sampling)
+        feats = generate_features(self.model, conditions, frames, batch_size=64, generator=generator,
+                                  precision=self.precision, **sampling)  # fmt: skip
         joints = [self.model.representation.decode_numpy(f).astype(np.float32) for f in feats]
         if smooth_sigma:
             joints = [smooth_joints(j, float(smooth_sigma)) for j in joints]
         info = {"model": self.source, **sampling, "seed": int(seed), "smooth_sigma": smooth_sigma,
-                "joints_changed": bool(smooth_sigma)}  # fmt: skip
+                "precision": self.precision, "joints_changed": bool(smooth_sigma)}  # fmt: skip
         return self._output(joints, feats, [self._label(c) for c in conditions], info)
 
     def long(
@@ -136,10 +143,11 @@ class MotionPipeline:
             secs.append(float(timed) if timed else float(s))
         n = self._count(num_samples)
         generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
+        segments = [(repeated(self.model, t, n), s) for t, s in zip(texts, secs, strict=True)]
         try:
-            result = generate_long(self.model, [(repeated(self.model, t, n), s) for t, s in zip(texts, secs, strict=True)],
-                                   overlap_s=float(overlap), blend_s=float(blend), num_samples=n, generator=generator,
-                                   labels=texts, **sampling)  # fmt: skip
+            with sampling_precision(self.model, self.precision):
+                result = generate_long(self.model, segments, overlap_s=float(overlap), blend_s=float(blend),
+                                       num_samples=n, generator=generator, labels=texts, **sampling)  # fmt: skip
         except ValueError as err:
             raise UsageError(str(err)) from None
         title = " then ".join(texts)
@@ -173,8 +181,9 @@ class MotionPipeline:
     def _edited(self, fn, source: InputMotion, prompt, options: dict, num_samples, seed, sampling) -> MotionOutput:
         condition = None if prompt is None else self._prompts(prompt)[0]
         try:
-            result = fn(self.model, source, condition=condition, num_samples=self._count(num_samples), seed=int(seed),
-                        **options, **sampling)  # fmt: skip
+            with sampling_precision(self.model, self.precision):
+                result = fn(self.model, source, condition=condition, num_samples=self._count(num_samples),
+                            seed=int(seed), **options, **sampling)  # fmt: skip
         except (EditError, ValueError) as err:
             raise UsageError(str(err)) from None
         info = {"model": self.source, "input": source.source, **result.settings}
