@@ -73,8 +73,11 @@ notebooks: setup
 
 # Time training, the forward pass, sampling and text encoding on this machine (<= 10 min on 2 cores); writes
 # bench/results/latest.{json,md}. Run it on an otherwise idle machine: other work skews every row.
+# `make bench OFFICIAL=<local clone of github.com/GuyTevet/motion-diffusion-model>` adds the official code's column to
+# the side-by-side table, timed in the same run.
+OFFICIAL ?=
 bench: setup allocator
-	$(WITH_TCMALLOC) $(PY) bench/run.py
+	$(WITH_TCMALLOC) $(PY) bench/run.py $(if $(OFFICIAL),--official "$(OFFICIAL)")
 
 # GuidedMotion against MDM on the complex-motion split (docs/results/guidedmotion), every stage timed in its run.json:
 # the three motion VAEs and the latent stage with the CPU recipe, then MDM for the same total wall time, then the

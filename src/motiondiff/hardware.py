@@ -84,6 +84,20 @@ def cpu_model() -> str:
     return platform.processor() or "unknown"
 
 
+SPEED_FLAGS = ("avx2", "avx512f", "avx512_bf16", "amx_bf16", "amx_tile")
+
+
+def cpu_flags(cpuinfo: str = "/proc/cpuinfo") -> dict[str, bool]:
+    """Which of the instruction sets that decide CPU matmul speed the kernel reports (all False where ``cpuinfo``
+    cannot be read). torch may still not use one it lacks kernels for: see ``cpu_has_fast_bf16``."""
+    try:
+        with open(cpuinfo) as f:
+            flags = next((line.split(":", 1)[1].split() for line in f if line.startswith("flags")), [])
+    except OSError:
+        flags = []
+    return {name: name in flags for name in SPEED_FLAGS}
+
+
 def resolve_device(name: str) -> str:
     """The torch device of ``device=``: ``auto`` is CUDA where a GPU is visible, else the CPU; an explicit device
     that this machine lacks is one clear error instead of torch's traceback deep inside loading."""

@@ -8,7 +8,9 @@ Rows (medians over repeats after a warm-up; peak resident memory of each piece o
 - sampling one motion and 32 motions from text with DDPM-1000, DDIM-50 and DDIM-10, with and without guidance, and
   with sample.py's default sampler; chains longer than ``timed_steps`` are timed over their first steps and scaled
   (each step runs the same forward), which the row says;
-- text encoding of one prompt with the encoder and from the embedding cache.
+- text encoding of one prompt with the encoder and from the embedding cache;
+- the side-by-side comparison (``compare``): the same workloads on the official MDM code when ``official`` names a
+  local checkout of it, and this project's column alone otherwise.
 ``quick=True`` shrinks everything (tiny network, 20 frames, 1 repeat) so the tests can run the whole suite.
 """
 
@@ -21,12 +23,12 @@ from collections.abc import Callable
 import torch
 
 from motiondiff.bench import workloads
+from motiondiff.bench.compare import comparison_table, params_and_notes, run_comparison
 from motiondiff.bench.flops import count_flops, matmul_flops_per_s
 from motiondiff.bench.report import machine
 from motiondiff.bench.timing import PeakMemory, median_seconds
+from motiondiff.bench.workloads import TINY
 from motiondiff.models.denoiser import PRESETS
-
-TINY = dict(d_model=32, num_layers=1, num_heads=2, ff_size=64, dropout=0.1, activation="gelu")
 
 
 def default_sampler() -> tuple[str, int | None]:
@@ -52,7 +54,7 @@ class Suite:
         with PeakMemory() as mem:
             timing = median_seconds(fn, repeats or self.repeats, self.warmup)
         row = {"name": name, "median_s": timing["median_s"] * scale, "times_s": [t * scale for t in timing["times_s"]],
-               "peak_rss_mb": mem.peak_bytes / 2**20, **detail}  # fmt: skip
+               "peak_rss_mb": mem.peak_bytes / 2**20, "key": key, **detail}  # fmt: skip
         row["detail"] = "; ".join(
             [*(str(v) for k, v in detail.items() if k == "note"), f"peak RSS {row['peak_rss_mb']:.0f} MB"]
         )
@@ -79,12 +81,17 @@ def compile_rows(s: Suite, quick: bool) -> None:
     row.update(compile_s=seconds, max_abs_diff=diff)
 
 
-def run_suite(quick: bool = False, model: str = "shipped", command: str = "", compile: bool = False) -> dict:
+def run_suite(quick: bool = False, model: str = "shipped", command: str = "", compile: bool = False,
+              official: str | None = None) -> dict:  # fmt: skip
+    """Every row; ``official``: a local checkout of the official MDM code to compare with (checked and imported
+    before anything is timed, so a bad path fails at once)."""
+    from motiondiff.bench.official_code import load_official
     from motiondiff.lit.conditions import text_encoder_kwargs
     from motiondiff.lit.loading import load_model as load_module
     from motiondiff.paths import REPO_DIR, find_checkpoint
 
     start = time.perf_counter()
+    code = load_official(official) if official else None
     s = Suite(quick)
     bf16_options = [False, True] if machine()["native_bf16"] else [False]
     frames = 20 if quick else 196
@@ -129,6 +136,7 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "", co
                               f"{shape[0]}x{shape[1]}x{shape[2]} matmul ({ref['flops_per_s'] / 1e9:.1f} GFLOP/s)")  # fmt: skip
             s.keys[f"forward_paper_bs{batch}{suffix}_mfu"] = row["mfu_vs_matmul"]
 
+    pairs = run_comparison(s, quick, code, bf16_options)
     if compile:
         compile_rows(s, quick)
 
@@ -168,8 +176,11 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "", co
                  f"{module.hparams.feature_dim} features) at {frames} frames; guidance {guidance} is its default.")  # fmt: skip
     notes.append("Training and forward rows use random features (263 wide) and random 384-d caption features: "
                  "train.py looks captions up in a pre-computed table, so no text encoder runs in a step.")  # fmt: skip
+    params, comparison_notes = params_and_notes(code, quick)
+    notes += comparison_notes
     if not machine()["native_bf16"]:
         notes.append("No bf16 rows: this CPU has no native bf16 (oneDNN would emulate it, 10-20x slower).")
     return {"machine": machine(), "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
             "command": command, "quick": quick, "wall_s": time.perf_counter() - start, **s.keys,
-            "rows": s.rows, "notes": notes}  # fmt: skip
+            "rows": s.rows, "comparison": comparison_table(s.rows, s.keys, pairs), "params": params,
+            "official": {"path": str(code.path), "commit": code.commit} if code else None, "notes": notes}  # fmt: skip

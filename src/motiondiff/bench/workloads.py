@@ -1,7 +1,9 @@
 """The measured pieces of work: a training step of the MDM denoiser, its forward pass, sampling one or many motions
 with each sampler, and text encoding. Training and forward use random features of the HumanML3D width and random
 caption features (no text encoder runs in a training step: the project looks captions up in a pre-computed table);
-sampling uses a real model (the shipped one by default) and a real prompt."""
+sampling uses a real model (the shipped one by default) and a real prompt. The rows compared with the official MDM
+code (``guided_forward``, ``feature_sampling``) use a randomly initialised denoiser and random caption features on
+both sides: the cost of a step does not depend on the weights."""
 
 from __future__ import annotations
 
@@ -16,6 +18,8 @@ from motiondiff.models.denoiser import PRESETS, MDMDenoiser
 FEATURE_DIM = 263  # HumanML3D features
 COND_DIM = 384  # MiniLM sentence features (the project's default text encoder)
 PROMPT = "a person walks forward and waves both hands"
+TINY = dict(d_model=32, num_layers=1, num_heads=2, ff_size=64, dropout=0.1, activation="gelu")  # --quick's network
+GUIDANCE = 2.5  # MDM's default guidance scale (the comparison rows; the cost does not depend on it unless it is 0 or 1)
 
 
 def autocast(bf16: bool):
@@ -78,19 +82,56 @@ def forward(
     return run
 
 
-def forward_flops(preset: str | dict, batch: int, frames: int) -> int:
-    """FLOPs of that forward. Counted on the unfused path (train mode, no grad): PyTorch's FLOP counter does not see
-    inside the fused inference kernels, which compute the same products."""
+def forward_flops(preset: str | dict, batch: int, frames: int, guided: bool = False) -> int:
+    """FLOPs of that forward (``guided``: of ``guided_forward``). Counted on the unfused path (train mode, no grad):
+    PyTorch's FLOP counter does not see inside the fused inference kernels, which compute the same products."""
     from motiondiff.bench.flops import count_flops
+    from motiondiff.diffusion.guidance import classifier_free_guidance
 
     model = build_denoiser(preset).train()
     data = random_batch(batch, frames)
+    t = torch.full((batch,), 500)
     with torch.no_grad():
-        return count_flops(lambda: model(data["x0"], torch.full((batch,), 500), cond=data["cond"], mask=data["mask"]))
+        if guided:
+            return count_flops(lambda: classifier_free_guidance(model, data["x0"], t, data["cond"], GUIDANCE,
+                                                                mask=data["mask"]))  # fmt: skip
+        return count_flops(lambda: model(data["x0"], t, cond=data["cond"], mask=data["mask"]))
+
+
+def guided_forward(preset: str | dict, batch: int, frames: int, scale: float = GUIDANCE) -> Callable[[], torch.Tensor]:
+    """The network work of one guided sampling step: classifier-free guidance as the samplers run it (one forward of
+    the doubled [conditional; unconditional] batch, eval mode, inference_mode)."""
+    from motiondiff.diffusion.guidance import classifier_free_guidance
+
+    model = build_denoiser(preset).eval()
+    data = random_batch(batch, frames)
+    t = torch.full((batch,), 500)
+
+    @torch.inference_mode()
+    def run() -> torch.Tensor:
+        return classifier_free_guidance(model, data["x0"], t, data["cond"], scale, mask=data["mask"])
+
+    return run
 
 
 class _Stop(Exception):
     pass
+
+
+def _stopper(limit: int, total: int):
+    """(xt_hook that stops a chain after ``limit`` steps or None when it runs to the end, reset)."""
+    done = [0]
+
+    def stop_after(x, t_next):
+        done[0] += 1
+        if done[0] >= limit:
+            raise _Stop
+        return x
+
+    def reset() -> None:
+        done[0] = 0
+
+    return (stop_after if limit < total else None), reset
 
 
 def sampling(module, count: int, frames: int, sampler: str, steps: int | None, guidance: float,
@@ -105,19 +146,40 @@ def sampling(module, count: int, frames: int, sampler: str, steps: int | None, g
     lengths = torch.full((count,), frames)
     total = len(select_timesteps(module.diffusion.num_steps, steps if sampler == "ddpm" else steps or 50))
     limit = total if timed_steps is None else min(total, timed_steps)
-    done = [0]
-
-    def stop_after(x, t_next):
-        done[0] += 1
-        if done[0] >= limit and limit < total:
-            raise _Stop
-        return x
+    hook, reset = _stopper(limit, total)
 
     def run():
-        done[0] = 0
+        reset()
         with contextlib.suppress(_Stop):
-            module.sample(cond, lengths, guidance=guidance, sampler=sampler, steps=steps,
-                          xt_hook=stop_after if limit < total else None)  # fmt: skip
+            module.sample(cond, lengths, guidance=guidance, sampler=sampler, steps=steps, xt_hook=hook)
+
+    return run, total, limit
+
+
+def feature_sampling(preset: str | dict, frames: int, sampler: str, steps: int | None, scale: float = GUIDANCE,
+                     timed_steps: int | None = None) -> tuple[Callable[[], object], int, int]:  # fmt: skip
+    """One motion from random caption features with a randomly initialised denoiser of ``preset``: the samplers'
+    guided loop (DDIM or DDPM, cosine 1000-step process, x0 prediction, no x̂0 clipping) without a checkpoint, to
+    compare with the official code on the same sizes. Returns (run, steps_total, steps_run) as ``sampling`` does."""
+    from motiondiff.diffusion.guidance import guided_model_fn
+    from motiondiff.diffusion.samplers import ddim_sample, ddpm_sample, select_timesteps
+
+    if sampler not in ("ddim", "ddpm"):
+        raise ValueError(f"feature_sampling runs ddim or ddpm, got {sampler!r}")
+    model = build_denoiser(preset).eval()
+    diffusion = GaussianDiffusion(make_betas("cosine", 1000), prediction="x0")
+    data = random_batch(1, frames)
+    fn = guided_model_fn(model, data["cond"], scale, mask=data["mask"])
+    steps = (steps or 50) if sampler == "ddim" else steps
+    total = len(select_timesteps(diffusion.num_steps, steps))
+    limit = total if timed_steps is None else min(total, timed_steps)
+    hook, reset = _stopper(limit, total)
+    loop = ddim_sample if sampler == "ddim" else ddpm_sample
+
+    def run():
+        reset()
+        with contextlib.suppress(_Stop):
+            loop(diffusion, fn, (1, frames, FEATURE_DIM), steps=steps, xt_hook=hook)
 
     return run, total, limit
 

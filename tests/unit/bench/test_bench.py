@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import re
 from pathlib import Path
 
 import torch
@@ -68,6 +69,12 @@ def test_quick_bench_writes_the_table_and_the_required_keys(tmp_path):
     assert compiled["max_abs_diff"] <= 1e-5  # the compiled forward computes what eager does
     table = (tmp_path / "result.md").read_text()
     assert "| train step, tiny preset, batch 64, 20 frames |" in table and "(default sampler)" in table
+    # without --official: the side-by-side table has this project's column only, with GFLOP/s and peak share
+    assert result["official"] is None and all(e["official_s"] is None for e in result["comparison"])
+    assert "| workload | motiondiff median | motiondiff GFLOP/s (share of matmul peak) | note |" in table
+    assert "official median" not in table and "CPU flags: avx2" in table
+    (train,) = [line for line in table.splitlines() if line.startswith("| train step, batch 64, 20 frames |")]
+    assert re.search(r"\| \d+\.\d \(\d+%\) \|", train)
 
 
 def test_forward_flops_match_the_transformer_formula():
