@@ -48,26 +48,6 @@ def shade(triangles: np.ndarray, light: np.ndarray) -> np.ndarray:
     return BODY_RGB * (AMBIENT + (1 - AMBIENT) * cosine)[:, None]
 
 
-def mesh_animation(
-    vertices: np.ndarray,
-    faces: np.ndarray,
-    title: Title = "",
-    fps: float = 20.0,
-    dpi: int = 80,
-    step: int = 1,
-    *,
-    joints: np.ndarray | None = None,
-    skeleton: Skeleton | None = None,
-):
-    """A matplotlib FuncAnimation of meshes (N, V, 3) (metres, y up) with triangles `faces` (F, 3): every
-    ``step``-th frame. The camera follows joint 0 of `joints` (N, J, 3) and looks as render.py's does for that
-    `skeleton`; without joints it follows the mesh's centroid. Close its figure when done (``plt.close(anim._fig)``)."""
-    from matplotlib import animation
-
-    fig, draw, frames = mesh_frames(vertices, faces, title, dpi, step, joints=joints, skeleton=skeleton)
-    return animation.FuncAnimation(fig, draw, frames=frames, interval=1000 * max(1, int(step)) / fps)
-
-
 def mesh_frames(
     vertices: np.ndarray,
     faces: np.ndarray,
@@ -78,7 +58,9 @@ def mesh_frames(
     joints: np.ndarray | None = None,
     skeleton: Skeleton | None = None,
 ):
-    """(figure, draw(frame index), frame indices) of `mesh_animation`, for render.save_frames. The body is one
+    """(figure, draw(frame index), frame indices) for render.save_frames: meshes (N, V, 3) (metres, y up) with
+    triangles `faces` (F, 3), every ``step``-th frame. The camera follows joint 0 of `joints` (N, J, 3) and looks as
+    render.py's does for that `skeleton`; without joints it follows the mesh's centroid. The body is one
     Poly3DCollection whose triangles and colours each frame replaces; the ground lines are redrawn around the root."""
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -127,7 +109,7 @@ def render_mesh(
 ) -> Path:
     """Animate meshes (N, V, 3) (metres, y up; triangles `faces` (F, 3)) to `path` (.mp4 or .gif): a shaded light
     gray body in a 4-inch square figure of ``4 * dpi`` pixels, every ``frame_step``-th frame at the motion's own
-    speed. ``joints``/``skeleton``: the motion, whose root the camera follows (`mesh_animation`)."""
+    speed. ``joints``/``skeleton``: the motion, whose root the camera follows (`mesh_frames`)."""
     path = check_video_path(path)
     frame_step = max(1, int(frame_step))
     quiet_matplotlib()

@@ -111,6 +111,13 @@ def test_the_video_shows_a_shaded_body_framed_like_the_stick_figure(tmp_path, cl
         assert abs((cols[0] + cols[-1]) / 2 / mask.shape[1] - 0.5) < 0.15  # the camera follows it
         gray = np.asarray(video.convert("L"))[mask]
         assert gray.std() > 10  # shaded: faces turned to the light are brighter
+    # meshes alone: the camera follows their centroid
+    alone = Image.open(render_mesh(vertices[:3], body.faces, tmp_path / "alone.gif"))
+    mask = body_pixels(alone)
+    cols = np.where(mask.any(0))[0]
+    assert (
+        alone.n_frames == 3 and 0.02 < mask.mean() < 0.3 and abs((cols[0] + cols[-1]) / 2 / mask.shape[1] - 0.5) < 0.15
+    )
 
 
 def test_bad_meshes_are_refused_before_a_file_is_written(tmp_path):
