@@ -1,5 +1,6 @@
 """`python sample.py ...`: generate motion from text, an action name or nothing, and write joints, features and
-stick-figure videos, plus results.json with what each sample measurably does.
+stick-figure videos (or, with render=mesh and smpl_model=, videos of an SMPL body), plus results.json with what each
+sample measurably does.
 
 Timed prompts, `prompts="[a person walks forward:4, a person waves:3]"` (or `action="[walk:4, wave:3]"`), make ONE
 long motion that follows them in order (`edit.long_motion`); `smooth_sigma=` applies vvMDM's temporal filter and
@@ -35,6 +36,7 @@ from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
+from motiondiff.export.smpl_mesh import render_body
 from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.diffusion import MotionDiffusionModule
@@ -143,9 +145,9 @@ def run(cfg: DictConfig) -> Path:
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir, "action" if cfg.action is not None else "text")
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
-    formats, cleanup = export_formats(cfg), cleanup_option(cfg)
+    formats, cleanup, body = export_formats(cfg), cleanup_option(cfg), render_option(cfg)
     module = load_model(ckpt, cfg.device)
-    check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"))
+    check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"), body)
     prompts = collect_prompts(plain, module)
     frames = num_frames(cfg, module) if seconds is None else None
     sigma = smoothing_sigma(cfg, module)
@@ -160,12 +162,11 @@ def run(cfg: DictConfig) -> Path:
     shape = feed_forward_shape(module, int(cfg.num_samples), frames or int(module.hparams.max_frames))
     precision = inference_precision(cfg.get("precision", "auto"), cfg.device, shape)
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "steps": steps,
-               "precision": precision,
-               "clip_x0": module.clip_rule}  # fmt: skip
+               "precision": precision, "clip_x0": module.clip_rule}  # fmt: skip
     if seconds is not None:
         with sampling_precision(module, precision):
             summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats,
-                                       cleanup))  # fmt: skip
+                                       cleanup, body))  # fmt: skip
         (out / "results.json").write_text(json.dumps(summary, indent=1))
         print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
         return out
@@ -178,7 +179,7 @@ def run(cfg: DictConfig) -> Path:
                                   progress=True, precision=precision)  # fmt: skip
         feats = np.stack(feats)
         results += save_samples(
-            out, prompt, feats, module, formats, sigma, cleanup=cleanup, rig_names=cfg.get("bvh_names")
+            out, prompt, feats, module, formats, sigma, cleanup=cleanup, rig_names=cfg.get("bvh_names"), body=body
         )
     summary["samples"] = results
     (out / "results.json").write_text(json.dumps(summary, indent=1))
@@ -192,6 +193,12 @@ def export_formats(cfg: DictConfig) -> list[str]:
         return parse_formats(cfg.export if not isinstance(cfg.export, ListConfig) else list(cfg.export))
     except ValueError as err:
         raise UsageError(str(err)) from None
+
+
+def render_option(cfg: DictConfig):
+    """``render=`` and ``smpl_model=``: the SMPL body the videos show (None: stick figures), loaded and checked
+    before the model loads (``export.smpl_mesh.render_body``)."""
+    return render_body(cfg.get("render"), cfg.get("smpl_model"))
 
 
 def cleanup_option(cfg: DictConfig) -> tuple[str, ...]:
@@ -237,7 +244,7 @@ def long_motion_settings(cfg, module, prompts: list, seconds: list[float]) -> tu
     return float(overlap), float(blend)
 
 
-def sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats, cleanup=()):
+def sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats, cleanup=(), body=None):
     """One long motion per sample through the timed prompts; returns the results.json entries."""
     overlap, blend = long_motion_settings(cfg, module, prompts, seconds)
     n = cfg.num_samples
@@ -251,7 +258,7 @@ def sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, 
     title = ", ".join(f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True))
     shown = [(s["start"], str(s["label"])) for s in long.segments]  # the videos show the prompt playing
     rows = save_samples(out, title, long.features, module, formats, sigma, stem=f"long_{slug(' then '.join(prompts))}",
-                        cleanup=cleanup, title=shown, rig_names=cfg.get("bvh_names"))  # fmt: skip
+                        cleanup=cleanup, title=shown, rig_names=cfg.get("bvh_names"), body=body)  # fmt: skip
     seams, blends = [w.plan.start for w in long.windows[1:]], [w.plan.blend for w in long.windows[1:]]
     for row, joints, boundaries in zip(rows, long.joints, long.boundaries, strict=True):
         if sigma is not None:  # the filter also runs across the seams: how they look in the saved joints
@@ -281,12 +288,14 @@ def save_samples(
     cleanup: tuple[str, ...] = (),
     title=None,
     rig_names: str | None = None,
+    body=None,
 ) -> list[dict]:
     """Joints, features and the ``formats`` (export.outputs) per sample; with ``sigma`` the saved joints are the
     smoothed ones (the raw ones go to *_joints_raw.npy) and the row reports the smoothness metric before and after;
     ``cleanup`` (``edit.cleanups``: bones, feet) then runs on them and the row holds each clean-up's report.
     ``title``: what the videos and viewer show (default the prompt; a long motion's (first frame, prompt) segments);
-    ``rig_names``: bone names of the bvh/fbx/glb files (export.rig_names: smpl, mixamo)."""
+    ``rig_names``: bone names of the bvh/fbx/glb files (export.rig_names: smpl, mixamo); ``body``: the SMPL body
+    model whose mesh the mp4/gif videos show (render=mesh; None: stick figures)."""
     rep = module.representation
     bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
     fps = module.hparams.fps
@@ -314,7 +323,7 @@ def save_samples(
         np.save(f"{stem_k}_features.npy", f.astype(np.float32))
         changed = sigma is not None or bool(cleanup)
         exports = export_features(stem_k, rep, f, fps, formats, title=title or prompt or "unconditioned",
-                                  joints=joints if changed else None, rig_names=rig_names)  # fmt: skip
+                                  joints=joints if changed else None, rig_names=rig_names, body=body)  # fmt: skip
         facts = measure(feature_joints, fps)
         speed = mean_joint_speed(feature_joints, fps)
         rows.append(

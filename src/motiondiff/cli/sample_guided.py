@@ -44,7 +44,7 @@ def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, 
 
 
 def run(cfg: DictConfig) -> Path:
-    from motiondiff.cli.sample import cleanup_option, export_formats, save_samples, smoothing_sigma
+    from motiondiff.cli.sample import cleanup_option, export_formats, render_option, save_samples, smoothing_sigma
     from motiondiff.export.outputs import check_formats_for
     from motiondiff.lit.conditions import check_text
     from motiondiff.lit.loading import load_model
@@ -55,12 +55,12 @@ def run(cfg: DictConfig) -> Path:
     if cfg.text is None:
         raise UsageError('method=guidedmotion needs text="..." (one caption; its verbs become the local actions)')
     text = check_text(cfg.text)
-    formats, sigma, cleanup = export_formats(cfg), smoothing_sigma(cfg), cleanup_option(cfg)
+    formats, sigma, cleanup, body = export_formats(cfg), smoothing_sigma(cfg), cleanup_option(cfg), render_option(cfg)
     if cfg.checkpoint in ("shipped", "latest", "best"):
         raise UsageError("method=guidedmotion needs checkpoint=<path to a train_latent.py checkpoint>")
     path = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = HierarchicalLatentModule.load_from_checkpoint(path, map_location=cfg.device, weights_only=True).eval()
-    check_formats_for(formats, module.decoder.representation.skeleton, cfg.get("bvh_names"))
+    check_formats_for(formats, module.decoder.representation.skeleton, cfg.get("bvh_names"), body)
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     steps = level_steps(cfg, module)
@@ -89,6 +89,7 @@ def run(cfg: DictConfig) -> Path:
         sigma,
         cleanup=cleanup,
         rig_names=cfg.get("bvh_names"),
+        body=body,
     )
     summary = {
         "method": "guidedmotion", "checkpoint": str(path), "text": text, "level_steps": steps, "rho": float(cfg.rho),

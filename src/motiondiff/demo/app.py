@@ -1,5 +1,6 @@
 """The Gradio page of `motiondiff-demo`: a prompt (or an action), length, guidance, seed and number of samples in;
-per sample the project's 3D viewer, an MP4 and BVH/NPZ downloads out.
+per sample the project's 3D viewer, an MP4 and BVH/NPZ downloads out (and a GLB where Blender's bpy is
+available).
 
 `build_demo(models)` returns the `gr.Blocks` app (library code: a script or a test can launch it without the CLI).
 A mistake the user can fix (empty text, a length the model cannot make, an unknown action) shows as a warning and
@@ -16,7 +17,7 @@ from pathlib import Path
 
 import gradio as gr
 
-from motiondiff.demo.models import GLB_NOTE, MAX_SAMPLES, DemoModels, Sample, generate
+from motiondiff.demo.models import MAX_SAMPLES, DemoModels, Sample, download_kinds, generate, glb_note
 from motiondiff.errors import UsageError
 
 log = logging.getLogger(__name__)
@@ -40,7 +41,7 @@ def _slot_updates(samples: list[Sample]) -> list:
         if i < len(samples):
             s = samples[i]
             updates += [gr.update(visible=True), gr.update(value=f"**{s.title}**"),
-                        gr.update(value=viewer_iframe(s.html, s.title)), str(s.mp4), [str(s.bvh), str(s.npz)]]  # fmt: skip
+                        gr.update(value=viewer_iframe(s.html, s.title)), str(s.mp4), [str(p) for p in s.downloads()]]  # fmt: skip
         else:
             updates += [gr.update(visible=False), gr.update(value=""), gr.update(value=""), None, None]
     return updates
@@ -89,12 +90,13 @@ def build_demo(
         local = out.info.get("local_actions")
         if local:
             settings += "; local actions: " + ", ".join(f"{a['text']} (weight {a['weight']:g})" for a in local)
-        return [f"Generated {len(samples)} motion(s) with **{key}** ({settings}). {GLB_NOTE}", *_slot_updates(samples)]
+        note = glb_note(models.glb, next((s.glb_error for s in samples if s.glb_error), None))
+        return [f"Generated {len(samples)} motion(s) with **{key}** ({settings}). {note}", *_slot_updates(samples)]
 
     with gr.Blocks(title="motiondiff demo") as demo:
         gr.Markdown("# motiondiff: text and action to human motion\nDescribe a motion (or pick an action), then "
                     "**Generate**. Each sample shows in a 3D viewer (drag to turn, play/pause below it) and as a "
-                    "video, with BVH and NPZ downloads.")  # fmt: skip
+                    f"video, with {download_kinds(models.glb)} downloads.")  # fmt: skip
         with gr.Row():
             with gr.Column(scale=3):
                 model = gr.Dropdown([(c.label, c.key) for c in models.choices], value=default, label="model")
@@ -116,7 +118,7 @@ def build_demo(
                 with gr.Accordion("advanced", open=False):
                     n_steps = gr.Slider(1, 1000, value=steps, step=1, label="sampler steps (DDIM)", elem_id="steps")
         button = gr.Button("Generate", variant="primary", elem_id="generate")
-        status = gr.Markdown(GLB_NOTE, elem_id="status")
+        status = gr.Markdown(glb_note(models.glb), elem_id="status")
         slots = []
         for i in range(MAX_SAMPLES):
             with gr.Column(visible=False, elem_id=f"sample-{i}") as column:
@@ -124,8 +126,8 @@ def build_demo(
                 viewer = gr.HTML(elem_id=f"viewer-{i}")
                 with gr.Row():
                     video = gr.Video(label="video", elem_id=f"video-{i}", interactive=False)
-                    files = gr.File(label="downloads (BVH, NPZ)", file_count="multiple", elem_id=f"files-{i}",
-                                    interactive=False)  # fmt: skip
+                    files = gr.File(label=f"downloads ({download_kinds(models.glb)})", file_count="multiple",
+                                    elem_id=f"files-{i}", interactive=False)  # fmt: skip
             slots += [column, title, viewer, video, files]
         model.change(on_model, model, [text, action, weights, secs, guidance])
         inputs = [model, text, action, secs, guidance, seed, count, n_steps, weights]

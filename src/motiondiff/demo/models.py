@@ -4,11 +4,13 @@
 GuidedMotion checkpoint is given, GuidedMotion; each pipeline is loaded on first use and kept, so a page that
 generates again (or switches back to a model) does not load it twice. `generate` runs one request through the public
 pipelines (`motiondiff.pipelines`) and writes per sample the files the page shows and offers: the self-contained HTML
-viewer, an MP4, a BVH and an NPZ (joints, features and fps in one file). Bad input raises `UsageError`.
+viewer, an MP4, a BVH, an NPZ (joints, features and fps in one file) and, where Blender's bpy is available (the
+check of export=glb, `export.blender`), a GLB that Blender makes from the BVH. Bad input raises `UsageError`.
 """
 
 from __future__ import annotations
 
+import subprocess
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,12 +18,35 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.errors import UsageError
+from motiondiff.export.blender import blender_command, convert_bvh
 from motiondiff.paths import SHIPPED_MODELS
 from motiondiff.pipelines import GuidedMotionPipeline, MotionOutput, MotionPipeline
 from motiondiff.pipelines.motion import MODELS_DIR
 
 MAX_SAMPLES = 4  # samples per request: the page has this many result slots
-GLB_NOTE = "GLB: not available in this install (no GLB exporter; it needs Blender's bpy). BVH and NPZ are offered."
+GLB_INCLUDED = "GLB: included (written by Blender from the BVH). BVH, GLB and NPZ are offered."
+GLB_MISSING = ("GLB: not available in this install (it needs Blender's bpy: pip install 'motiondiff[blender]', or "
+               "MOTIONDIFF_BLENDER_PYTHON naming a Python with bpy or a blender executable). BVH and NPZ are offered.")  # fmt: skip
+
+
+def glb_available() -> bool:
+    """Whether this install can write GLB files: Blender's bpy (or a Blender named by MOTIONDIFF_BLENDER_PYTHON)."""
+    return blender_command() is not None
+
+
+def glb_note(available: bool, failed: str | None = None) -> str:
+    """The page's line on GLB downloads: included, missing from this install (and how to get it), or, when Blender
+    is there but could not write this request's file (`failed`: its error), that it failed."""
+    if not available:
+        return GLB_MISSING
+    if failed:
+        return f"GLB: Blender could not write it this time ({failed}). BVH and NPZ are offered."
+    return GLB_INCLUDED
+
+
+def download_kinds(glb: bool) -> str:
+    """The download formats the page names: "BVH, GLB, NPZ" or "BVH, NPZ"."""
+    return "BVH, GLB, NPZ" if glb else "BVH, NPZ"
 
 
 @dataclass(frozen=True)
@@ -46,7 +71,8 @@ class ModelInfo:
 
 @dataclass
 class Sample:
-    """One generated motion's files and its caption line for the page."""
+    """One generated motion's files and its caption line for the page; ``glb`` None where it was not written
+    (no Blender, or ``glb_error`` says why Blender failed)."""
 
     index: int
     title: str
@@ -54,6 +80,12 @@ class Sample:
     mp4: Path
     bvh: Path
     npz: Path
+    glb: Path | None = None
+    glb_error: str | None = None
+
+    def downloads(self) -> list[Path]:
+        """The files the page offers for download: the BVH, the GLB when there is one, the NPZ."""
+        return [p for p in (self.bvh, self.glb, self.npz) if p is not None]
 
 
 def released_choices() -> list[ModelChoice]:
@@ -70,6 +102,7 @@ class DemoModels:
     """The models the demo offers, each loaded once (thread-safe: Gradio runs handlers in worker threads)."""
 
     def __init__(self, guided: str | Path | None = None, local_model: str = "text", device: str = "cpu"):
+        self.glb = glb_available()  # once: what the page says and what `generate` writes agree
         self.choices = released_choices()
         if guided is not None:
             path = Path(guided)
@@ -139,7 +172,8 @@ def generate(
     weights: str | None = None,
 ) -> tuple[MotionOutput, list[Sample]]:
     """Generate ``num_samples`` motions of ``prompt`` (a text, or an action model's action name) with model ``key``
-    and write each one's viewer, MP4, BVH and NPZ under ``out_dir``."""
+    and write each one's viewer, MP4, BVH and NPZ under ``out_dir``, and a GLB when ``models.glb`` (a Blender
+    failure leaves it out and is in the sample's ``glb_error``)."""
     num_samples = _whole(num_samples, "number of samples", 1, MAX_SAMPLES)
     seed = _whole(seed, "seed", 0, 2**63 - 1)
     steps = None if steps in (None, "") else _whole(steps, "steps", 1, 10_000)
@@ -160,8 +194,19 @@ def generate(
         exports = row["exports"]
         npz = write_npz(Path(exports["bvh"]).with_suffix(".npz"), out.joints[i], out.features[i], out.fps)
         title = f"sample {i + 1}: {out.prompts[i] or 'unconditioned'}, {out.seconds(i):.1f} s at {out.fps:g} fps"
-        samples.append(Sample(i, title, Path(exports["html"]), Path(exports["mp4"]), Path(exports["bvh"]), npz))
+        glb, error = _glb(Path(exports["bvh"]), out.fps) if models.glb else (None, None)
+        samples.append(Sample(i, title, Path(exports["html"]), Path(exports["mp4"]), Path(exports["bvh"]), npz, glb,
+                              error))  # fmt: skip
     return out, samples
+
+
+def _glb(bvh: Path, fps: float) -> tuple[Path | None, str | None]:
+    """The GLB Blender writes from the sample's BVH (as export=glb does), or None and why Blender failed: the other
+    files are still offered."""
+    try:
+        return convert_bvh(bvh, bvh.with_suffix(".glb"), fps), None
+    except (RuntimeError, OSError, subprocess.TimeoutExpired, UsageError) as err:
+        return None, str(err)
 
 
 def _whole(value, name: str, low: int, high: int) -> int:

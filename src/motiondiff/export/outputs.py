@@ -13,17 +13,22 @@ from pathlib import Path
 
 import numpy as np
 
+from motiondiff.data.formats.smpl_params import SmplBody
 from motiondiff.data.representations import Representation
+from motiondiff.errors import UsageError
 from motiondiff.export import export_motion
 from motiondiff.export.blender import BLENDER_FORMATS, check_blender, convert_bvh
 from motiondiff.export.bvh_export import export_bvh, export_bvh_from_features
+from motiondiff.export.mesh_render import render_mesh
 from motiondiff.export.render import Title
 from motiondiff.export.rig_names import with_rig_names
 from motiondiff.export.smpl_export import check_smpl_skeleton, export_smpl, export_smpl_from_features
+from motiondiff.export.smpl_mesh import check_mesh_skeleton, smpl_vertices
 from motiondiff.skeleton import Skeleton
 
 OUTPUT_FORMATS = ("mp4", "gif", "bvh", "html", "smpl", *BLENDER_FORMATS)  # the arrays (.npy) are always written
 ROTATION_FORMATS = ("bvh", "smpl")  # written from the features (a model's own rotations), or solved from changed joints
+VIDEO_FORMATS = ("mp4", "gif")  # stick figures, or with a body model (render=mesh) its shaded mesh
 
 
 def parse_formats(value: str | Sequence[str] | None) -> list[str]:
@@ -42,12 +47,20 @@ def parse_formats(value: str | Sequence[str] | None) -> list[str]:
     return list(dict.fromkeys(formats))
 
 
-def check_formats_for(formats: Sequence[str], skeleton: Skeleton, rig_names: str | None = None) -> None:
-    """Refuse, before anything is generated or written, formats the skeleton cannot be written in (smpl: SMPL-22
-    or SMPL-24 only); one UsageError naming what is supported."""
+def check_formats_for(
+    formats: Sequence[str], skeleton: Skeleton, rig_names: str | None = None, body: SmplBody | None = None
+) -> None:
+    """Refuse, before anything is generated or written, formats the skeleton cannot be written in (smpl, and videos
+    of a `body` model's mesh: SMPL-22 or SMPL-24 only); one UsageError naming what is supported."""
     formats = parse_formats(formats)
     if "smpl" in formats:
         check_smpl_skeleton(skeleton)
+    if body is not None:
+        check_mesh_skeleton(skeleton)
+        if not any(f in VIDEO_FORMATS for f in formats):
+            asked = ",".join(formats) or "none"
+            raise UsageError(f"render=mesh draws the SMPL body in the mp4/gif videos, and export={asked} has none: "
+                             "add mp4 or gif to export= (or drop render=mesh)")  # fmt: skip
     check_blender(formats)  # fbx/glb: Blender must be there
     with_rig_names(skeleton, rig_names)  # a preset this skeleton has names for
 
@@ -61,14 +74,16 @@ def export_features(
     title: Title = "",
     joints: np.ndarray | None = None,
     rig_names: str | None = None,
+    body: SmplBody | None = None,
 ) -> dict:
     """Write ``{stem}.{format}`` for each format; returns {format: path} and, with a BVH, its fit error
     ("bvh_max_error_m", "bvh_mean_error_m": FK of the file against the joints it was made from; generated joints
     stretch their bones from frame to frame, which a BVH's fixed bone lengths cannot follow exactly); with smpl,
     ``{stem}_smpl.npz`` and the same three numbers ("smpl_max_error_m", ...). ``joints``: the motion to show when
-    it is not simply the features decoded (e.g. smoothed or cleaned up)."""
+    it is not simply the features decoded (e.g. smoothed or cleaned up). ``body``: an SMPL body model
+    (`smpl_mesh.render_body`) whose mesh the mp4/gif videos show instead of stick figures."""
     formats = parse_formats(formats)
-    check_formats_for(formats, representation.skeleton, rig_names)
+    check_formats_for(formats, representation.skeleton, rig_names, body)
     named = with_rig_names(representation.skeleton, rig_names)  # bone names of the bvh/fbx/glb files
     stem = Path(stem)
     written: dict = {}
@@ -106,6 +121,14 @@ def export_features(
     others = [f for f in formats if f not in ROTATION_FORMATS and f not in BLENDER_FORMATS]
     if others:
         shown = representation.decode_numpy(np.asarray(features)) if joints is None else joints
-        paths = export_motion(stem, shown, representation.skeleton, fps, others, title=title)
+        meshes = [f for f in others if f in VIDEO_FORMATS] if body is not None else []
+        if meshes:  # the body model's mesh, posed by the joints shown (once for both videos)
+            vertices = smpl_vertices(shown, representation.skeleton, fps, body)
+            for fmt in meshes:
+                path = render_mesh(vertices, body.faces, stem.parent / f"{stem.name}.{fmt}", title, fps, joints=shown,
+                                   skeleton=representation.skeleton)  # fmt: skip
+                written[fmt] = str(path)
+        rest = [f for f in others if f not in meshes]
+        paths = export_motion(stem, shown, representation.skeleton, fps, rest, title=title) if rest else {}
         written.update({fmt: str(p) for fmt, p in paths.items()})
     return written

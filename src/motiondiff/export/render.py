@@ -38,39 +38,31 @@ def stick_figure_animation(
     never along the line of motion. ``title``: one text, or (first frame, text) segments shown as they play.
     Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``; close its figure when done
     (``plt.close(anim._fig)``)."""
-    import matplotlib.pyplot as plt
     from matplotlib import animation
 
+    fig, draw, frames = stick_frames(joints, skeleton, title, dpi, step)
+    return animation.FuncAnimation(fig, draw, frames=frames, interval=1000 * max(1, int(step)) / fps)
+
+
+def stick_frames(joints: np.ndarray, skeleton: Skeleton, title: Title = "", dpi: int = 80, step: int = 1):
+    """(figure, draw(frame index), frame indices) of `stick_figure_animation`, for `save_frames`."""
     joints = np.asarray(joints, dtype=np.float64)
     if joints.ndim != 3 or joints.shape[1:] != (skeleton.num_joints, 3):
         raise ValueError(f"expected joints (frames, {skeleton.num_joints}, 3), got {joints.shape}")
-    fig = plt.figure(figsize=(4, 4), dpi=dpi)
-    fig.subplots_adjust(left=0, right=1, bottom=0, top=1)
-    ax = fig.add_subplot(projection="3d")
-    ax.set_box_aspect((1, 1, 1), zoom=ZOOM)
+    fig, ax = video_axes(dpi)
     trail = joints[:, 0, [0, 2]]
-    height = float((joints[..., 1].max(axis=1) - np.minimum(joints[..., 1].min(axis=1), 0)).max())
-    half = max(0.6, 0.55 * height)  # half the side of the followed cube: the body's height fills it
+    half = follow_half(joints)
     azim = camera_azimuth(joints, skeleton)
     head = head_joint(skeleton)
     chains = [(c, _chain_color(c, skeleton)) for c in skeleton.kinematic_chains]
 
     def draw(i: int):
         ax.clear()
-        ax.set_axis_off()
-        ax.view_init(elev=ELEVATION, azim=azim)
-        cx, cz = trail[i]
-        ax.set_xlim(cx - half, cx + half)
-        ax.set_ylim(cz - half, cz + half)
-        ax.set_zlim(0, 2 * half)
+        follow(ax, azim, trail[i], half)
         text = title_at(title, i)
         if text:
-            ax.text2D(0.5, 0.97, _wrap(text), transform=ax.transAxes, ha="center", va="top", fontsize=8)
-        for g in np.arange(np.floor(cx - half), np.ceil(cx + half) + 0.25, 0.5):  # ground grid, world-fixed
-            ax.plot([g, g], [cz - half, cz + half], [0, 0], color="#dddddd", lw=0.5)
-        for g in np.arange(np.floor(cz - half), np.ceil(cz + half) + 0.25, 0.5):
-            ax.plot([cx - half, cx + half], [g, g], [0, 0], color="#dddddd", lw=0.5)
-        ax.plot(trail[: i + 1, 0], trail[: i + 1, 1], np.zeros(i + 1), color="#ff9900", lw=1.5)
+            ax.text2D(0.5, 0.97, wrap_title(text), transform=ax.transAxes, ha="center", va="top", fontsize=8)
+        draw_ground(ax, trail, i, half)
         frame = joints[i]
         for chain, color in chains:
             ax.plot(frame[list(chain), 0], frame[list(chain), 2], frame[list(chain), 1], color=color, lw=2.5)
@@ -78,8 +70,7 @@ def stick_figure_animation(
             ax.scatter(*frame[head, [0, 2, 1]], s=90, color=_COLORS["torso"], depthshade=False)
         return []
 
-    frames = range(0, len(joints), max(1, int(step)))
-    return animation.FuncAnimation(fig, draw, frames=frames, interval=1000 * max(1, int(step)) / fps)
+    return fig, draw, range(0, len(joints), max(1, int(step)))
 
 
 ELEVATION = 15  # degrees above the ground: low enough to read heights, high enough to see the ground trail
@@ -87,13 +78,14 @@ ZOOM = 1.35  # matplotlib's 3D box leaves wide margins at zoom 1
 SIDE_ANGLE = 55  # degrees between the travel (or facing) direction and the camera: front-side, never edge-on
 
 
-def camera_azimuth(joints: np.ndarray, skeleton: Skeleton) -> float:
+def camera_azimuth(joints: np.ndarray, skeleton: Skeleton | None) -> float:
     """matplotlib azimuth (degrees; its x-y plane is our x-z ground) of a camera SIDE_ANGLE off the direction the
-    root travels, or, for motion that stays in place (< 0.5 m), off the direction the body faces in frame 0."""
+    root (joint 0) travels, or, for motion that stays in place (< 0.5 m), off the direction the body faces in frame
+    0 (+z when the skeleton is None or has no facing joints)."""
     travel = joints[-1, 0, [0, 2]] - joints[0, 0, [0, 2]]
     if np.linalg.norm(travel) >= 0.5:
         forward = travel
-    elif skeleton.face_joints is not None:
+    elif skeleton is not None and skeleton.face_joints is not None:
         r_hip, l_hip, r_sho, l_sho = skeleton.face_joints
         across = joints[0, r_hip] - joints[0, l_hip] + joints[0, r_sho] - joints[0, l_sho]
         forward = np.cross([0.0, 1.0, 0.0], across)[[0, 2]]  # up x (right - left) = forward
@@ -107,6 +99,47 @@ def head_joint(skeleton: Skeleton) -> int | None:
     roles = skeleton.leaf_roles or {}
     heads = [j for j, role in roles.items() if role == "head"] or list(skeleton.parts.get("head", ()))[-1:]
     return heads[0] if heads else None
+
+
+def video_axes(dpi: int):
+    """A 4-inch square figure filled by one 3D axes (matplotlib's x-y plane is our x-z ground, its z our y up)."""
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(4, 4), dpi=dpi)
+    fig.subplots_adjust(left=0, right=1, bottom=0, top=1)
+    ax = fig.add_subplot(projection="3d")
+    ax.set_box_aspect((1, 1, 1), zoom=ZOOM)
+    return fig, ax
+
+
+def follow_half(points: np.ndarray) -> float:
+    """Half the side of the cube the camera follows, for points (N, P, 3) (joints or a mesh's vertices, y up):
+    the body's tallest extent above the ground (or its lowest point) fills it."""
+    height = float((points[..., 1].max(axis=1) - np.minimum(points[..., 1].min(axis=1), 0)).max())
+    return max(0.6, 0.55 * height)
+
+
+def follow(ax, azim: float, centre: np.ndarray, half: float) -> None:
+    """Point the camera (ELEVATION, `azim`) at the cube of half side `half` around ground point `centre` (x, z)."""
+    ax.set_axis_off()
+    ax.view_init(elev=ELEVATION, azim=azim)
+    cx, cz = centre
+    ax.set_xlim(cx - half, cx + half)
+    ax.set_ylim(cz - half, cz + half)
+    ax.set_zlim(0, 2 * half)
+
+
+def draw_ground(ax, trail: np.ndarray, i: int, half: float, zorder: float | None = None) -> list:
+    """The world-fixed ground grid around frame `i`'s root and the root's trail (N, 2) so far; returns the lines."""
+    cx, cz = trail[i]
+    extra = {} if zorder is None else {"zorder": zorder}
+    lines = []
+    for g in np.arange(np.floor(cx - half), np.ceil(cx + half) + 0.25, 0.5):
+        lines += ax.plot([g, g], [cz - half, cz + half], [0, 0], color="#dddddd", lw=0.5, **extra)
+    for g in np.arange(np.floor(cz - half), np.ceil(cz + half) + 0.25, 0.5):
+        lines += ax.plot([cx - half, cx + half], [g, g], [0, 0], color="#dddddd", lw=0.5, **extra)
+    lines += ax.plot(trail[: i + 1, 0], trail[: i + 1, 1], np.zeros(i + 1), color="#ff9900", lw=1.5, **extra)
+    return lines
 
 
 def title_at(title: Title, frame: int) -> str:
@@ -130,27 +163,51 @@ def render_motion(
 ) -> Path:
     """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif): a 4-inch square figure of ``4 * dpi``
     pixels, every ``frame_step``-th frame (played at the motion's own speed)."""
+    path = check_video_path(path)
+    frame_step = max(1, int(frame_step))
+    quiet_matplotlib()
+    return save_frames(*stick_frames(joints, skeleton, title, dpi, frame_step), path, fps / frame_step, dpi)
+
+
+def check_video_path(path: str | Path) -> Path:
+    """`path` as a Path when it names a .mp4 or .gif file in an existing folder; ValueError (or NotADirectoryError)
+    before anything is drawn otherwise."""
+    path = Path(path)
+    if path.suffix.lower() not in (".mp4", ".gif"):
+        raise ValueError(f"cannot render to {path.name}: use a .mp4 or .gif file name")
+    if not path.parent.is_dir():
+        raise NotADirectoryError(f"cannot write {path}: the folder {path.parent} does not exist")
+    return path
+
+
+def quiet_matplotlib() -> None:
+    """The Agg backend (no display needed) and no INFO line for every saved animation."""
     import logging
 
     import matplotlib
 
     matplotlib.use("Agg")
-    logging.getLogger("matplotlib.animation").setLevel(logging.WARNING)  # it logs every save at INFO
+    logging.getLogger("matplotlib.animation").setLevel(logging.WARNING)
+
+
+def save_frames(fig, draw, frames, path: Path, fps: float, dpi: int) -> Path:
+    """Write the figure after `draw(i)` for each of `frames` to `path` (.mp4 or .gif) at `fps` frames per second,
+    atomically, and close the figure. Each frame is drawn once (FuncAnimation.save draws each twice)."""
+    import matplotlib
     import matplotlib.pyplot as plt
 
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in (".mp4", ".gif"):
-        raise ValueError(f"cannot render to {path.name}: use a .mp4 or .gif file name")
-    if not path.parent.is_dir():
-        raise NotADirectoryError(f"cannot write {path}: the folder {path.parent} does not exist")
-    frame_step = max(1, int(frame_step))
-    anim = stick_figure_animation(joints, skeleton, title, fps, dpi, frame_step)
-    writer = _writer(suffix, fps / frame_step)
+    writer = _writer(path.suffix.lower(), fps)
+
+    def write(tmp):
+        with matplotlib.rc_context({"savefig.bbox": None}), writer.saving(fig, tmp, dpi):
+            for i in frames:
+                draw(i)
+                writer.grab_frame()
+
     try:
-        atomic_write(path, lambda tmp: anim.save(tmp, writer=writer, dpi=dpi), suffix=suffix)
+        atomic_write(path, write, suffix=path.suffix.lower())
     finally:
-        plt.close(anim._fig)
+        plt.close(fig)
     return path
 
 
@@ -165,7 +222,8 @@ def _writer(suffix: str, fps: float):
     return animation.FFMpegWriter(fps=fps, codec="libx264", extra_args=["-pix_fmt", "yuv420p"])
 
 
-def _wrap(text: str, width: int = 48) -> str:
+def wrap_title(text: str, width: int = 48) -> str:
+    """The title in lines of at most `width` characters (words kept whole)."""
     words, lines, line = text.split(), [], ""
     for w in words:
         if len(line) + len(w) + 1 > width and line:

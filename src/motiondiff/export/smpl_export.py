@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from motiondiff.data.representations import Representation
 
 __all__ = ["SMPL_NEUTRAL_PELVIS", "SmplLayoutError", "check_smpl_skeleton", "export_smpl",
-           "export_smpl_from_features", "smpl_joints"]  # fmt: skip
+           "export_smpl_from_features", "smpl_joints", "smpl_parameters"]  # fmt: skip
 
 # Rest position of the pelvis (J_0) of the SMPL neutral template at zero shape, metres, rounded like the template
 # offsets in skeleton.SMPL24_REST_OFFSETS.
@@ -58,16 +58,18 @@ class SmplLayoutError(UsageError):
     """The motion's skeleton is not one SMPL's joints can be read from."""
 
 
-def check_smpl_skeleton(skeleton: Skeleton) -> int:
+def check_smpl_skeleton(
+    skeleton: Skeleton, purpose: str = "export=smpl", instead: str = "export it as bvh (any skeleton) instead"
+) -> int:
     """22 or 24: how many SMPL joints the skeleton has (its joints are SMPL's first ones, in SMPL's order);
-    SmplLayoutError naming what is supported otherwise."""
+    SmplLayoutError naming what is supported (for `purpose`) and what to do `instead` otherwise."""
     parents = tuple(int(p) for p in skeleton.parents)
     for layout in (SMPL24, SMPL22):
         if parents == tuple(layout.parents):
             return layout.num_joints
     raise SmplLayoutError(
-        f"export=smpl needs a motion on {SUPPORTED}; this one is on {skeleton.name!r} ({skeleton.num_joints} "
-        "joints): export it as bvh (any skeleton) instead"
+        f"{purpose} needs a motion on {SUPPORTED}; this one is on {skeleton.name!r} ({skeleton.num_joints} "
+        f"joints): {instead}"
     )
 
 
@@ -81,14 +83,31 @@ def export_smpl(
     root: np.ndarray | None = None,
     offsets: np.ndarray | None = None,
 ) -> ExportReport:
-    """Write joints (N, J, 3) (metres, y up) of a SMPL-22 or SMPL-24 skeleton as SMPL parameters to `path` (.npz).
+    """Write joints (N, J, 3) (metres, y up) of a SMPL-22 or SMPL-24 skeleton as SMPL parameters to `path` (.npz):
+    the arrays of `smpl_parameters` (which see for `rotations`, `root`, `offsets`). The report's error is
+    |FK(file) - joints| (metres) over frames and joints. Written atomically."""
+    data, distance, method = smpl_parameters(joints, skeleton, fps, rotations=rotations, root=root, offsets=offsets)
+    atomic_write(path, lambda tmp: np.savez(tmp, **data), suffix=".npz")
+    return ExportReport(Path(path), float(distance.max()), float(distance.mean()), len(data["poses"]), method)
+
+
+def smpl_parameters(
+    joints: np.ndarray,
+    skeleton: Skeleton,
+    fps: float,
+    *,
+    rotations: np.ndarray | None = None,
+    root: np.ndarray | None = None,
+    offsets: np.ndarray | None = None,
+) -> tuple[dict, np.ndarray, str]:
+    """The SMPL parameters of joints (N, J, 3) (metres, y up) of a SMPL-22 or SMPL-24 skeleton, without writing
+    them: (the file's arrays, |FK(arrays) - joints| (N, J) in metres, "rotations" or "ik").
 
     With `rotations` (N, J, 4) (local quaternions w, x, y, z; the root's global) and `root` (N, 3), as a rotation
-    representation gives them, those are written on `offsets` (default: the skeleton's). Otherwise they are solved
+    representation gives them, those are used on `offsets` (default: the skeleton's). Otherwise they are solved
     by IK on SMPL's rest directions with the motion's own bone lengths and pelvis/chest arrangement, exact for rigid
     bones; when the joints stretch their bones (generated motion) rotations and bone lengths are then fitted to
-    keep the worst joint as close as a fixed skeleton can (`refine_rotations`). The report's error is
-    |FK(file) - joints| (metres) over frames and joints. Written atomically."""
+    keep the worst joint as close as a fixed skeleton can (`refine_rotations`)."""
     count = check_smpl_skeleton(skeleton)
     joints = check_motion(joints, skeleton, fps, "export_smpl")
     if (rotations is None) != (root is None):
@@ -116,8 +135,7 @@ def export_smpl(
         rotations, offsets = refine_rotations(joints, _smpl_rest(count), offsets, rotations, root)
         data = _smpl_arrays(rotations, root, offsets, fps)
         distance = np.linalg.norm(smpl_joints(data)[:, :count] - joints, axis=-1)
-    atomic_write(path, lambda tmp: np.savez(tmp, **data), suffix=".npz")
-    return ExportReport(Path(path), float(distance.max()), float(distance.mean()), len(joints), method)
+    return data, distance, method
 
 
 def export_smpl_from_features(

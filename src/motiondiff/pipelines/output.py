@@ -14,6 +14,7 @@ import numpy as np
 from motiondiff.data.representations import Representation
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
+from motiondiff.export.smpl_mesh import render_body
 from motiondiff.skeleton import Skeleton
 
 
@@ -41,13 +42,23 @@ class MotionOutput:
     def seconds(self, i: int = 0) -> float:
         return len(self.joints[i]) / self.fps
 
-    def save(self, folder: str | Path, formats=("bvh",), rig_names: str | None = None) -> list[dict]:
+    def save(
+        self,
+        folder: str | Path,
+        formats=("bvh",),
+        rig_names: str | None = None,
+        *,
+        render: str = "stick",
+        smpl_model: str | Path | None = None,
+    ) -> list[dict]:
         """Write each motion's joints and features (.npy) and the ``formats`` (bvh, mp4, gif, html, smpl) to
         ``folder``, with results.json listing the files; returns its rows. The folder is created if needed; formats
         the skeleton cannot take (smpl off SMPL-22/24) are refused before anything is written. ``rig_names``: bone
-        names of the bvh/fbx/glb files (smpl or mixamo; None: the skeleton's)."""
+        names of the bvh/fbx/glb files (smpl or mixamo; None: the skeleton's). ``render="mesh"`` with
+        ``smpl_model=`` (the user's SMPL body model .npz) makes the mp4/gif videos show that body's mesh."""
         formats = parse_formats(list(formats) if not isinstance(formats, str) else formats)
-        check_formats_for(formats, self.representation.skeleton, rig_names)
+        body = render_body(render, smpl_model)
+        check_formats_for(formats, self.representation.skeleton, rig_names, body)
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         rows = []
@@ -56,7 +67,7 @@ class MotionOutput:
             np.save(f"{stem}_joints.npy", joints.astype(np.float32))
             np.save(f"{stem}_features.npy", feats.astype(np.float32))
             exports = export_features(stem, self.representation, feats, self.fps, formats, title=prompt or "",
-                                      joints=self._changed(i), rig_names=rig_names)  # fmt: skip
+                                      joints=self._changed(i), rig_names=rig_names, body=body)  # fmt: skip
             rows.append({"prompt": prompt, "index": i, "frames": len(joints), "joints": f"{stem}_joints.npy",
                          "features": f"{stem}_features.npy", "exports": exports})  # fmt: skip
         (folder / "results.json").write_text(json.dumps({"info": self.info, "samples": rows}, indent=1, default=str))

@@ -30,3 +30,23 @@ def test_an_unknown_action_is_a_status_line_with_the_fix(handlers):
     )
     assert status.startswith("**Please fix:** unknown action 'fly'") and "walk" in status
     assert column["visible"] is False
+
+
+@pytest.mark.parametrize("blender", [False, True])
+def test_the_status_and_downloads_say_whether_glb_is_there(monkeypatch, tmp_path, blender):
+    from motiondiff.demo import DemoModels, build_demo
+    from motiondiff.demo import models as demo_models
+
+    def fake_blender(bvh, out, fps):  # stands in for Blender's importer and glTF exporter
+        out.write_bytes(b"glTF")
+        return out
+
+    monkeypatch.setattr(demo_models, "blender_command", lambda: ["blender-python", "-c"] if blender else None)
+    monkeypatch.setattr(demo_models, "convert_bvh", fake_blender)
+    demo = build_demo(DemoModels(), "action", seconds=1.0, steps=2, output_dir=tmp_path)
+    on_generate = {f.name: f.fn for f in demo.fns.values()}["on_generate"]
+    status, column, _, _, video, files, *_ = on_generate("action", "", "walk", 0.5, 2.0, 0, 1, 2, "",
+                                                        progress=lambda *a, **k: None)  # fmt: skip
+    assert column["visible"] is True and video.endswith(".mp4")
+    assert [f.rsplit(".", 1)[1] for f in files] == (["bvh", "glb", "npz"] if blender else ["bvh", "npz"])
+    assert status.endswith(demo_models.GLB_INCLUDED if blender else demo_models.GLB_MISSING)
