@@ -13,7 +13,7 @@ from __future__ import annotations
 from motiondiff.bench import official, workloads
 from motiondiff.bench.flops import count_flops
 from motiondiff.bench.official_code import OfficialCode
-from motiondiff.bench.report import format_seconds
+from motiondiff.bench.timing import format_seconds
 
 DDPM_TIMED = 20
 TWO_FORWARDS = "official: conditional and unconditional forward one after the other; motiondiff: one doubled batch"

@@ -8,6 +8,7 @@ import platform
 
 import torch
 
+from motiondiff.bench.timing import format_seconds
 from motiondiff.hardware import cpu_flags, cpu_has_fast_bf16, cpu_model
 
 
@@ -58,7 +59,3 @@ def markdown(result: dict) -> str:
         lines += comparison_markdown(result["comparison"], with_official=bool(result.get("official")))
     lines += ["", *[f"- {note}" for note in result.get("notes", [])], ""]
     return "\n".join(lines)
-
-
-def format_seconds(s: float) -> str:
-    return f"{s * 1e3:.2f} ms" if s < 1 else f"{s:.2f} s"

@@ -57,3 +57,8 @@ class PeakMemory:
         self._stop.set()
         self._thread.join()
         self.peak_bytes = max(self.peak_bytes, rss_bytes())
+
+
+def format_seconds(s: float) -> str:
+    """A duration as the tables show it: milliseconds under a second, else seconds."""
+    return f"{s * 1e3:.2f} ms" if s < 1 else f"{s:.2f} s"
