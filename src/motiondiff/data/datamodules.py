@@ -13,17 +13,16 @@ from pathlib import Path
 
 import lightning as L
 import numpy as np
-import torch
-from torch.utils.data import DataLoader, get_worker_info
+from torch.utils.data import DataLoader
 
-from motiondiff.data.datasets import MotionDataset, MotionRecord, collate_motion
+from motiondiff.data.datasets import MotionDataset, MotionRecord
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.formats.prepared import PreparedSplit
 from motiondiff.data.formats.prepared import load_split as load_prepared_split
+from motiondiff.data.loaders import motion_loader
 from motiondiff.data.representations import Representation, get_representation
 from motiondiff.data.representations.clip import ClipSplit, LabelledClip
 from motiondiff.data.representations.spec import HMLBridge, bridge_from_spec, representation_spec
-from motiondiff.data.resumable import EpochShuffleSampler, balance_weights
 from motiondiff.data.sources.humanml3d import HUMANML3D, KIT, OfficialLayout, load_official_split
 from motiondiff.skeleton import SMPL22
 
@@ -33,18 +32,13 @@ SplitData = tuple[list[MotionRecord], np.ndarray, np.ndarray]
 _STAGE_SPLITS = {"fit": ("train", "val"), "validate": ("val",), "test": ("test",), "predict": ("test",)}
 
 
-def _reseed_worker(worker_id: int) -> None:
-    # Each worker gets a copy of the dataset's rng: without this all workers draw the same crops/captions.
-    info = get_worker_info()
-    if info is not None and isinstance(info.dataset, MotionDataset):
-        info.dataset.rng = np.random.default_rng(info.seed)
-
-
 class MotionDataModule(L.LightningDataModule, abc.ABC):
     """Base: subclasses only say how to read a split (`load_split`) and the skeleton facts.
 
     `load_split` must return the training-set statistics for every split (the official layouts ship one
     Mean/Std); val/test are normalised with them, and a split that returns different statistics is an error.
+    `bucketing`: training batches of similar-length clips, sorted in chunks of `bucket_chunk` batches
+    (`motiondiff.data.bucketing`); far less padding where clip lengths vary.
     """
 
     def __init__(
@@ -56,8 +50,11 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         seed: int = 0,
         balance: float = 0.0,
         window_min_frames: int | None = None,
+        bucketing: bool = False,
+        bucket_chunk: int = 64,
     ):
         super().__init__()
+        self.bucketing, self.bucket_chunk = bool(bucketing), int(bucket_chunk)
         self.window_min_frames = window_min_frames  # random training-window lengths: MotionDataset
         self.balance = float(balance)  # class-balanced training order: resumable.balance_weights
         self.batch_size = batch_size
@@ -138,25 +135,12 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
 
     def _loader(self, split: str) -> DataLoader:
         train = split == "train"
-        dataset = self.dataset(split)
-        sampler = None
-        if train:  # an order a resumed run can rebuild (motiondiff.data.resumable)
-            weights = balance_weights([r.action for r in dataset.records], self.balance)
-            sampler = EpochShuffleSampler(len(dataset), self.seed, weights)
-            if self.resume_position is not None:
-                sampler.resume(*self.resume_position)
-                self.resume_position = None
-        return DataLoader(
-            dataset,
-            batch_size=self.batch_size,
-            sampler=sampler,
-            drop_last=False,
-            num_workers=self.num_workers,
-            persistent_workers=self.num_workers > 0,
-            collate_fn=collate_motion,
-            worker_init_fn=_reseed_worker,
-            generator=torch.Generator().manual_seed(self.seed),  # repeatable worker seeds
-        )
+        resume = self.resume_position if train else None  # one train loader starts where the checkpoint was
+        if train:
+            self.resume_position = None
+        return motion_loader(self.dataset(split), self.batch_size, train=train, seed=self.seed,
+                             num_workers=self.num_workers, balance=self.balance, bucketing=self.bucketing,
+                             bucket_chunk=self.bucket_chunk, resume_position=resume)  # fmt: skip
 
     def train_dataloader(self) -> DataLoader:
         return self._loader("train")
@@ -185,6 +169,8 @@ class OfficialLayoutDataModule(MotionDataModule):
         unit_length: int | None = None,
         seed: int = 0,
         representation: str | None = None,
+        bucketing: bool = False,
+        bucket_chunk: int = 64,
     ):
         native = "hml263" if self.layout.num_joints == 22 else "kit251"
         if representation not in (None, native):
@@ -199,6 +185,8 @@ class OfficialLayoutDataModule(MotionDataModule):
             max_frames=self.layout.max_motion_len if max_frames is None else max_frames,
             unit_length=self.layout.unit_length if unit_length is None else unit_length,
             seed=seed,
+            bucketing=bucketing,
+            bucket_chunk=bucket_chunk,
         )
         self.root = Path(root)
 
@@ -240,8 +228,11 @@ class ClipDataModule(MotionDataModule, abc.ABC):
         representation: str | None = None,
         balance: float = 0.0,
         window_min_frames: int | None = None,
+        bucketing: bool = False,
+        bucket_chunk: int = 64,
     ):
-        super().__init__(batch_size, num_workers, max_frames, unit_length, seed, balance, window_min_frames)
+        super().__init__(batch_size, num_workers, max_frames, unit_length, seed, balance, window_min_frames, bucketing,
+                         bucket_chunk)  # fmt: skip
         self.min_frames = min_frames
         self.representation_name = representation or self.default_representation
         self._splits: dict[str, ClipSplit] = {}
@@ -344,9 +335,11 @@ class PreparedDataModule(ClipDataModule):
         extra_train: list[str | Path] | None = None,
         balance: float = 0.0,
         window_min_frames: int | None = None,
+        bucketing: bool = False,
+        bucket_chunk: int = 64,
     ):
         super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation, balance,
-                         window_min_frames)  # fmt: skip
+                         window_min_frames, bucketing, bucket_chunk)  # fmt: skip
         self.root = Path(root)
         self.meta: dict = {}
         self._prepared: dict[str, PreparedSplit] = {}
@@ -423,8 +416,11 @@ class BVHDataModule(PreparedDataModule):
         min_frames: int = 16,
         seed: int = 0,
         representation: str | None = None,
+        bucketing: bool = False,
+        bucket_chunk: int = 64,
     ):
-        super().__init__(cache, batch_size, num_workers, max_frames, min_frames, 1, seed, representation)
+        super().__init__(cache, batch_size, num_workers, max_frames, min_frames, 1, seed, representation,
+                         bucketing=bucketing, bucket_chunk=bucket_chunk)  # fmt: skip
         self.src, self.labels, self.joint_map_spec, self.max_clip_frames = src, labels, joint_map, max_clip_frames
 
     def prepared(self, split: str) -> PreparedSplit:

@@ -88,19 +88,34 @@ class MotionDataset(Dataset):
             )
         return motion * self.std + self.mean
 
+    def _item_rng(self, epoch: int, index: int) -> np.random.Generator:
+        return np.random.default_rng((self.seed, int(epoch), int(index)))
+
+    def _window_length(self, rec: MotionRecord, rng: np.random.Generator) -> int:
+        n = min(rec.length, self.max_frames)
+        if self.train and self.window_min_frames is not None:
+            n = int(rng.integers(min(n, self.window_min_frames), n + 1))
+        return max(self.unit_length, n - n % self.unit_length)
+
+    def item_lengths(self, epoch: int) -> np.ndarray:
+        """Frames of every item of ``epoch``: the ``length`` that ``self[(epoch, i)]`` returns, without building the
+        items (a length-bucketing sampler groups by it). Fixed unless training windows have random lengths."""
+        if self.train and self.window_min_frames is not None:
+            lengths = [self._window_length(r, self._item_rng(epoch, i)) for i, r in enumerate(self.records)]
+        else:  # no draw: self.rng is not touched
+            lengths = [self._window_length(r, self.rng) for r in self.records]
+        return np.asarray(lengths, dtype=np.int64)
+
     def __getitem__(self, key: int | tuple[int, int]) -> dict:
         """``key``: a clip index, or (epoch, index) from `EpochShuffleSampler`, in which case the random window and
         caption come from (seed, epoch, index) alone, so a resumed run draws what the interrupted one would have."""
         if isinstance(key, tuple):
             epoch, index = key
-            rng = np.random.default_rng((self.seed, int(epoch), int(index)))
+            rng = self._item_rng(epoch, index)
         else:
             index, rng = key, self.rng
         rec = self.records[index]
-        n = min(rec.length, self.max_frames)
-        if self.train and self.window_min_frames is not None:
-            n = int(rng.integers(min(n, self.window_min_frames), n + 1))
-        n = max(self.unit_length, n - n % self.unit_length)
+        n = self._window_length(rec, rng)  # the first draw of rng, so `item_lengths` can repeat it
         start = 0
         if self.train and rec.length > n:
             start = int(rng.integers(0, rec.length - n + 1))
