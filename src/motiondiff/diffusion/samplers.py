@@ -31,17 +31,39 @@ X0Guide = Callable[[Callable[[torch.Tensor], torch.Tensor], torch.Tensor, float,
 ClipX0 = float | Callable[[torch.Tensor], torch.Tensor] | None
 
 
-def select_timesteps(num_steps: int, steps: int | None = None) -> list[int]:
-    """``steps`` evenly spaced indices in [0, T−1], ascending, always including 0 and T−1 (one step: just T−1).
+SPACINGS = ("uniform", "logsnr")
 
-    k_i = round(i (T−1)/(S−1)); the spacing is ≥ 1 for S ≤ T, so the indices are distinct. ``None`` keeps all T.
+
+def select_timesteps(
+    num_steps: int, steps: int | None = None, spacing: str = "uniform", alphas_cumprod: Sequence[float] | None = None
+) -> list[int]:
+    """``steps`` distinct indices in [0, T−1], ascending, always including 0 and T−1 (one step: just T−1).
+
+    ``uniform`` (DDIM, MDM): k_i = round(i (T−1)/(S−1)); the spacing is ≥ 1 for S ≤ T. ``logsnr`` (DPM-Solver's
+    choice for low-dimensional data): the indices nearest to S values of λ = ½ log(ᾱ/(1−ᾱ)) evenly spaced from λ_{T−1}
+    to λ_0 (``alphas_cumprod`` gives ᾱ), taken strictly decreasing from T−1 so that S stay distinct where λ crowds
+    (the cosine schedule's last steps). ``None`` keeps all T.
     """
     steps = num_steps if steps is None else int(steps)
     if not 1 <= steps <= num_steps:
         raise ValueError(f"steps must be in [1, {num_steps}] (the process has {num_steps} steps), got {steps}")
+    if spacing not in SPACINGS:
+        raise ValueError(f"unknown timestep spacing {spacing!r}; choose one of {', '.join(SPACINGS)}")
     if steps == 1:
         return [num_steps - 1]
-    return [(2 * i * (num_steps - 1) + steps - 1) // (2 * (steps - 1)) for i in range(steps)]
+    if spacing == "uniform" or steps == num_steps:
+        return [(2 * i * (num_steps - 1) + steps - 1) // (2 * (steps - 1)) for i in range(steps)]
+    if alphas_cumprod is None or len(alphas_cumprod) != num_steps:
+        raise ValueError(f"logsnr spacing needs the process's {num_steps} values of alphas_cumprod")
+    lam = [0.5 * math.log(a / (1.0 - a)) for a in alphas_cumprod]  # decreasing in t
+    kept, previous = [], num_steps
+    for i in range(steps):  # noisiest first
+        target = lam[-1] + (lam[0] - lam[-1]) * i / (steps - 1)
+        nearest = min(range(num_steps), key=lambda k: abs(lam[k] - target))
+        previous = max(min(nearest, previous - 1), steps - 1 - i)  # distinct, and room left for the rest
+        kept.append(previous)
+    kept[-1] = 0
+    return kept[::-1]
 
 
 def _initial_noise(

@@ -185,6 +185,24 @@ def test_select_timesteps_and_respacing():
         select_timesteps(10, 11)
 
 
+@pytest.mark.parametrize("steps", [2, 5, 10, 20, 50, 1000])
+def test_logsnr_spacing_is_distinct_and_even_in_log_snr_where_it_can_be(steps):
+    diff = GaussianDiffusion.create("cosine", 1000)
+    ab = diff.alphas_cumprod.tolist()
+    kept = select_timesteps(1000, steps, "logsnr", ab)
+    assert len(set(kept)) == steps and kept == sorted(kept) and kept[0] == 0 and kept[-1] == 999
+    lam = 0.5 * torch.log(diff.alphas_cumprod / (1 - diff.alphas_cumprod))
+    if steps == 10:  # away from the crowded noisy end, the steps are each nearest to their log-SNR target
+        targets = torch.linspace(float(lam[-1]), float(lam[0]), steps, dtype=torch.float64).flip(0)
+        for k, target in zip(kept[:6], targets[:6], strict=True):
+            assert int(torch.argmin((lam - target).abs())) == k
+        assert kept[:6] != select_timesteps(1000, 10)[:6]  # not DDIM's
+    with pytest.raises(ValueError, match="logsnr spacing needs the process's 1000 values"):
+        select_timesteps(1000, 10, "logsnr")
+    with pytest.raises(ValueError, match="unknown timestep spacing 'cubic'"):
+        select_timesteps(1000, 10, "cubic", ab)
+
+
 def _toy_model(x, t):
     return torch.tanh(0.5 * x) + 1e-3 * t[:, None, None].to(x.dtype)
 

@@ -49,10 +49,10 @@ def test_first_order_is_ddim_eta0(prediction):
     diffusion, model_fn, _ = _gaussian(prediction)
     noise = torch.randn(B, N, D, generator=_gen(1))
     ddim = ddim_sample(diffusion, model_fn, (B, N, D), steps=10, eta=0.0, noise=noise)
-    dpm = dpmpp_sample(diffusion, model_fn, (B, N, D), steps=10, order=1, noise=noise)
+    dpm = dpmpp_sample(diffusion, model_fn, (B, N, D), steps=10, order=1, noise=noise, spacing="uniform")
     assert dpm.dtype == torch.float32 and _maxdiff(dpm, ddim) < 2e-6
     ddim64 = ddim_sample(diffusion, model_fn, (B, N, D), steps=10, noise=noise.double())
-    dpm64 = dpmpp_sample(diffusion, model_fn, (B, N, D), steps=10, order=1, noise=noise.double())
+    dpm64 = dpmpp_sample(diffusion, model_fn, (B, N, D), steps=10, order=1, noise=noise.double(), spacing="uniform")
     assert _maxdiff(dpm64, ddim64) < 1e-12
 
 
@@ -96,10 +96,11 @@ def test_2m_with_few_steps_is_much_closer_to_the_exact_flow_than_ddim():
         return float((out - exact(x_T)).pow(2).mean().sqrt())
 
     ddim = error(ddim_sample(diffusion, model_fn, x_T.shape, steps=10, noise=x_T))
-    dpm = {n: error(dpmpp_sample(diffusion, model_fn, x_T.shape, steps=n, noise=x_T)) for n in (5, 10, 20, 50)}
+    on_ddim_steps = {"noise": x_T, "spacing": "uniform"}  # the same grid as DDIM: only the solvers differ
+    dpm = {n: error(dpmpp_sample(diffusion, model_fn, x_T.shape, steps=n, **on_ddim_steps)) for n in (5, 10, 20, 50)}
     assert dpm[10] * 3 < ddim
     assert dpm[5] > dpm[10] > dpm[20] > dpm[50]
-    assert error(dpmpp_sample(diffusion, model_fn, x_T.shape, steps=10, order=3, noise=x_T)) * 3 < ddim
+    assert error(dpmpp_sample(diffusion, model_fn, x_T.shape, steps=10, order=3, **on_ddim_steps)) * 3 < ddim
 
 
 @pytest.mark.parametrize("order", [2, 3])
@@ -120,8 +121,13 @@ def test_hooks_see_every_step_and_the_known_part_is_kept(order):
 
     out = dpmpp_sample(diffusion, model_fn, (B, N, D), steps=4, order=order, generator=_gen(0), x0_hook=x0_hook,
                        xt_hook=xt_hook, progress=True)  # fmt: skip
-    assert seen_x0 == select_timesteps(100, 4)[::-1] == [99, 66, 33, 0] and seen_xt == [66, 33, 0, -1]
+    steps = select_timesteps(100, 4, "logsnr", diffusion.alphas_cumprod.tolist())[::-1]  # the default spacing
+    assert seen_x0 == steps and seen_xt == [*steps[1:], -1] and steps != [99, 66, 33, 0]
     assert torch.equal(out[:, :3], known[:, :3]) and (out[:, 3:] - known[:, 3:]).abs().mean() > 0.1
+    seen_x0.clear()
+    dpmpp_sample(diffusion, model_fn, (B, N, D), steps=4, order=order, generator=_gen(0), x0_hook=x0_hook,
+                 spacing="uniform")  # fmt: skip
+    assert seen_x0 == select_timesteps(100, 4)[::-1] == [99, 66, 33, 0]
     clipped = dpmpp_sample(diffusion, model_fn, (B, N, D), steps=4, order=order, generator=_gen(0), clip_x0=0.25)
     assert float(clipped.abs().max()) == 0.25  # the clean end is the last (clipped) x̂0
 
