@@ -36,11 +36,13 @@ from motiondiff.rotations import (
 )
 from motiondiff.skeleton import Skeleton
 
-__all__ = ["DEFAULT_TWIST_HALF_LIFE", "fit_rest_offsets", "refine_rotations", "solve_rotations"]
+__all__ = ["DEFAULT_TWIST_HALF_LIFE", "REFINE_ABOVE_M", "fit_rest_offsets", "fit_rotations", "refine_rotations",
+           "solve_rotations"]  # fmt: skip
 
 # Frames (1 s at 20 fps) for a twist carried through a swing singularity to fade by half. Longer: smaller steps
 # (about 180 deg x (1 - 2^(-1/half_life)) per frame at worst); shorter: back to the untwisted solution sooner.
 DEFAULT_TWIST_HALF_LIFE = 20.0
+REFINE_ABOVE_M = 1e-3  # an IK fit worse than this (bones that change length: generated joints) is polished
 _PLANAR = 1e-6  # |sin| between two rest directions above which a joint's children fix a full rotation
 _TINY = 1e-12
 
@@ -230,3 +232,19 @@ def refine_rotations(
     out = offsets.copy()
     out[1:] *= lengths[:, None]
     return qfix(qnormalize(matrix_to_quat(local))), out
+
+
+def fit_rotations(
+    positions: np.ndarray, skeleton: Skeleton, offsets: np.ndarray, *, twist_half_life: float = DEFAULT_TWIST_HALF_LIFE
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rotations, root, offsets) reproducing `positions` on `skeleton`: `solve_rotations`, exact for rigid bones,
+    then `refine_rotations` (rotations and bone lengths) where some joint is more than REFINE_ABOVE_M off."""
+    from motiondiff.kinematics import forward_kinematics
+
+    rotations, root = solve_rotations(positions, skeleton, offsets, twist_half_life=twist_half_life)
+    translations = np.repeat(np.asarray(offsets, dtype=np.float64)[None], len(rotations), axis=0)
+    translations[:, 0] = root
+    error = np.linalg.norm(forward_kinematics(rotations, translations, skeleton.parents)[0] - positions, axis=-1)
+    if error.max() > REFINE_ABOVE_M:
+        rotations, offsets = refine_rotations(positions, skeleton, offsets, rotations, root)
+    return rotations, root, offsets

@@ -185,7 +185,15 @@ def generate(
     else:
         if pipe.condition_kind == "action" and (prompt is None or not str(prompt).strip()):
             raise UsageError(f"choose an action: one of {', '.join(pipe.actions)}")
-        out = pipe(prompt, seconds=float(seconds), num_samples=num_samples, guidance=guidance, steps=steps, seed=seed)
+        out = pipe(
+            prompt,
+            seconds=float(seconds),
+            num_samples=num_samples,
+            guidance=guidance,
+            sampler="ddim",
+            steps=steps,
+            seed=seed,
+        )  # the page's steps slider is DDIM's (GuidedMotion samples with DDIM too)
     out_dir = Path(out_dir)
     rows = out.save(out_dir, formats=["bvh", "mp4", "html"])
     samples = []

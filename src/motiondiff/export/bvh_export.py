@@ -27,7 +27,7 @@ import numpy as np
 
 from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
 from motiondiff.export.rig_names import with_rig_names
-from motiondiff.inverse_kinematics import fit_rest_offsets, solve_rotations
+from motiondiff.inverse_kinematics import fit_rest_offsets, fit_rotations, solve_rotations
 from motiondiff.motion_checks import check_motion
 from motiondiff.rotations import matrix_to_quat, qfix, qnormalize
 from motiondiff.skeleton import Skeleton
@@ -72,7 +72,9 @@ def export_bvh(
     rotation representation gives them, those are written as they are, on `offsets` (default: the skeleton's).
     Otherwise the rotations are solved by inverse kinematics on `offsets`, by default the motion's own bone lengths
     and sibling arrangement (`fit_rest_offsets`), which makes the fit exact up to float precision for any motion of
-    rigid bones. The file is written atomically (nothing is left behind on failure)."""
+    rigid bones; joints whose bones stretch (generated motion) then get rotations and bone lengths fitted to keep the
+    worst joint close (`inverse_kinematics.fit_rotations`). Given `offsets` are kept as they are. The file is written
+    atomically (nothing is left behind on failure)."""
     joints = check_motion(
         joints,
         skeleton,
@@ -92,8 +94,13 @@ def export_bvh(
         offsets = _check_offsets(skeleton.offsets if offsets is None else offsets, skeleton)
         method = "rotations"
     else:
-        offsets = fit_rest_offsets(joints, skeleton) if offsets is None else _check_offsets(offsets, skeleton)
-        rotations, root = solve_rotations(joints, skeleton, offsets, twist_half_life=TWIST_HALF_LIFE_S * fps)
+        half_life = TWIST_HALF_LIFE_S * fps
+        if offsets is None:  # the motion's own skeleton, polished where its bones stretch
+            rotations, root, offsets = fit_rotations(joints, skeleton, fit_rest_offsets(joints, skeleton),
+                                                     twist_half_life=half_life)  # fmt: skip
+        else:
+            offsets = _check_offsets(offsets, skeleton)
+            rotations, root = solve_rotations(joints, skeleton, offsets, twist_half_life=half_life)
         method = "ik"
     names = [re.sub(r"\s+", "_", n) for n in skeleton.joint_names]
     end_sites = {j: site * scale for j, site in skeleton.end_sites(offsets).items()}

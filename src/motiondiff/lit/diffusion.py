@@ -24,7 +24,7 @@ from motiondiff.models.conditioning import build_condition
 from motiondiff.models.denoiser import MDMDenoiser
 
 # The samplers ``sample`` knows and each one's default steps (None: every step of the chain).
-SAMPLER_STEPS = {"ddim": 50, "ddpm": None, "dpmpp": 10}
+SAMPLER_STEPS = {"ddim": 50, "ddpm": None, "dpmpp": 7}
 
 
 class MotionDiffusionModule(L.LightningModule):

@@ -96,7 +96,7 @@ class MotionPipeline:
         seconds: float | list[float] = 4.0,
         num_samples: int = 1,
         guidance: float | None = None,
-        sampler: str = "ddim",
+        sampler: str = "dpmpp",
         steps: int | None = None,
         eta: float = 0.0,
         seed: int = 0,
@@ -104,9 +104,9 @@ class MotionPipeline:
     ) -> MotionOutput:
         """``num_samples`` motions per prompt: texts (text models), action names or ids (action models) or None
         (unconditioned); one prompt or a list. ``seconds``: one length, or one per prompt. ``guidance``: the
-        classifier-free guidance scale (None: the model's default); ``sampler``: ddim, ddpm or dpmpp (DPM-Solver++(2M));
-        ``steps``: sampler steps (None: 50 for DDIM, 10 for DPM-Solver++, the whole chain for DDPM, at most the
-        model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
+        classifier-free guidance scale (None: the model's default); ``sampler``: dpmpp (DPM-Solver++(2M), the
+        default), ddim or ddpm; ``steps``: sampler steps (None: 7 for DPM-Solver++, 50 for DDIM, the whole chain for
+        DDPM, at most the model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
         prompts = self._prompts(prompt)
         lengths = [self._frames(s) for s in self._per_prompt(seconds, len(prompts), "seconds")]
         n = self._count(num_samples)

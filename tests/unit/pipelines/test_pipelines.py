@@ -32,9 +32,10 @@ def test_text_to_motion_and_reproducible_seeds(pipe):
     assert out.info["steps"] == 5 and out.info["guidance"] == pipe.model.default_guidance
 
 
-def test_dpmpp_sampler_with_its_default_steps(pipe):
-    out = pipe("a person walks forward", seconds=1, sampler="dpmpp")
-    assert out.info["sampler"] == "dpmpp" and out.info["steps"] == 10 and np.isfinite(out.joints[0]).all()
+def test_the_default_sampler_is_dpmpp_with_its_default_steps(pipe):
+    out = pipe("a person walks forward", seconds=1)
+    assert out.info["sampler"] == "dpmpp" and out.info["steps"] == 7 and np.isfinite(out.joints[0]).all()
+    assert pipe("a person walks forward", seconds=1, sampler="ddim").info["steps"] == 50
 
 
 def test_save_and_export(pipe, tmp_path):
