@@ -82,6 +82,14 @@ def run_comparison(s, quick: bool, code: OfficialCode | None, bf16_options: list
             loop = "ddim_sample_loop on its 'ddim50' respacing" if sampler == "ddim" else "p_sample_loop, its default"
             _official_row(s, f"{label}, {size} preset ({loop})", key, run, scale=total / done, note=note)
         pair(label, key, note=note)
+    for bf16 in bf16_options:  # this project's default sampler against the official 50-step loop
+        key = f"sample_features_dpmpp7_guided{'_bf16' if bf16 else ''}_s"
+        label = f"one motion from caption features, DPM-Solver++-7 (motiondiff's default){' bf16' if bf16 else ''}"
+        run, total, _ = workloads.feature_sampling(preset, frames, "dpmpp", 7, bf16=bf16)
+        s.time(f"{label}, {size} preset (random weights)", run, key=key, note=f"{total} steps")
+        pairs.append({"workload": f"{label} vs official DDIM-50", "motiondiff_key": key, "dtype": None,
+                      "official_key": "official_sample_features_ddim50_guided_s" if code else None,
+                      "note": "different samplers: matched quality, docs/results/sampler_curve.md"})  # fmt: skip
     return pairs
 
 

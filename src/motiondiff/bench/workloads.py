@@ -157,28 +157,31 @@ def sampling(module, count: int, frames: int, sampler: str, steps: int | None, g
 
 
 def feature_sampling(preset: str | dict, frames: int, sampler: str, steps: int | None, scale: float = GUIDANCE,
-                     timed_steps: int | None = None) -> tuple[Callable[[], object], int, int]:  # fmt: skip
+                     timed_steps: int | None = None, bf16: bool = False) -> tuple[Callable[[], object], int, int]:  # fmt: skip
     """One motion from random caption features with a randomly initialised denoiser of ``preset``: the samplers'
-    guided loop (DDIM or DDPM, cosine 1000-step process, x0 prediction, no x̂0 clipping) without a checkpoint, to
-    compare with the official code on the same sizes. Returns (run, steps_total, steps_run) as ``sampling`` does."""
+    guided loop (DDIM, DDPM or DPM-Solver++, cosine 1000-step process, x0 prediction, no x̂0 clipping; the denoiser
+    under bf16 autocast with ``bf16``) without a checkpoint, to compare with the official code on the same sizes.
+    Returns (run, steps_total, steps_run) as ``sampling`` does."""
+    from motiondiff.diffusion.dpm_solver import dpmpp_sample
     from motiondiff.diffusion.guidance import guided_model_fn
     from motiondiff.diffusion.samplers import ddim_sample, ddpm_sample, select_timesteps
 
-    if sampler not in ("ddim", "ddpm"):
-        raise ValueError(f"feature_sampling runs ddim or ddpm, got {sampler!r}")
+    loops = {"ddim": ddim_sample, "ddpm": ddpm_sample, "dpmpp": dpmpp_sample}
+    if sampler not in loops:
+        raise ValueError(f"feature_sampling runs ddim, ddpm or dpmpp, got {sampler!r}")
     model = build_denoiser(preset).eval()
     diffusion = GaussianDiffusion(make_betas("cosine", 1000), prediction="x0")
     data = random_batch(1, frames)
     fn = guided_model_fn(model, data["cond"], scale, mask=data["mask"])
-    steps = (steps or 50) if sampler == "ddim" else steps
+    steps = {"ddim": steps or 50, "dpmpp": steps or 7}.get(sampler, steps)
     total = len(select_timesteps(diffusion.num_steps, steps))
     limit = total if timed_steps is None else min(total, timed_steps)
     hook, reset = _stopper(limit, total)
-    loop = ddim_sample if sampler == "ddim" else ddpm_sample
+    loop = loops[sampler]
 
     def run():
         reset()
-        with contextlib.suppress(_Stop):
+        with contextlib.suppress(_Stop), autocast(bf16):
             loop(diffusion, fn, (1, frames, FEATURE_DIM), steps=steps, xt_hook=hook)
 
     return run, total, limit
