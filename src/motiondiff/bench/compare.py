@@ -89,7 +89,7 @@ def run_comparison(s, quick: bool, code: OfficialCode | None, bf16_options: list
         s.time(f"{label}, {size} preset (random weights)", run, key=key, note=f"{total} steps")
         pairs.append({"workload": f"{label} vs official DDIM-50", "motiondiff_key": key, "dtype": None,
                       "official_key": "official_sample_features_ddim50_guided_s" if code else None,
-                      "note": "different samplers: matched quality, docs/results/sampler_curve.md"})  # fmt: skip
+                      "note": "different samplers at matched quality: docs/results/few_step_sampling.md"})  # fmt: skip
     return pairs
 
 

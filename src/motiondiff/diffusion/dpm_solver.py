@@ -11,7 +11,7 @@ quadratic through the last three x̂0. Data prediction keeps the steps bounded u
 is why the paper prefers it to DPM-Solver's noise prediction for guided sampling.
 The steps are evenly spaced in λ by default (``samplers.select_timesteps``, "logsnr"), the paper's choice for
 low-dimensional data; on DDIM's evenly spaced t the shipped text model's FID at 10 steps was twice DDIM-50's, in λ
-it matches it (docs/results/sampler_curve.md). The order ramps up over the first steps (too little history) and down
+it matches it (docs/results/few_step_sampling.md). The order ramps up over the first steps (too little history) and down
 over the last ones, the paper's lower-order final steps: the λ gap into t = 0 is several times the one before it,
 and extrapolating x̂0 across it overshoots, so that step is first order and the one before it at most second. The
 last step goes to ᾱ = 1 (h = ∞) and returns x̂0, as DDIM does.

@@ -64,7 +64,7 @@ class MotionPipeline:
     @classmethod
     def from_pretrained(cls, name_or_path: str | Path = "text", device: str = "cpu", precision: str = "auto"):
         """A released model by name ("text", "action", ...) or a .ckpt/.safetensors path. ``precision``: "auto"
-        samples in bf16 where the hardware runs it natively (measured: docs/results/bf16_inference.md), "32" in
+        samples in bf16 where the hardware runs it natively (measured: docs/results/few_step_sampling.md), "32" in
         full precision, "bf16" forced."""
         path = resolve_model(name_or_path)
         return cls(load_model(path, device), str(path), precision)
