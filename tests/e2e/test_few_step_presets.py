@@ -38,8 +38,12 @@ def test_t10_preset_trains_evaluates_and_samples(tmp_path):
     assert metrics["steps"] == 10 and metrics["summary"]["fid"][0] > 0  # DDIM over the whole 10-step chain
 
     _, out = run_entry("sample", tmp_path / "sample", f"checkpoint={ckpt}", "text=a person walks", "num_samples=1",
-                       "export=none")  # the default sampler, fitted to T  # fmt: skip
+                       "export=none", "sampler=ddim")  # DDIM's default 50 steps, fitted to T  # fmt: skip
     assert json.loads((out / "results.json").read_text())["steps"] == 10
+    _, out = run_entry("sample", tmp_path / "sample_default", f"checkpoint={ckpt}", "text=a person walks",
+                       "num_samples=1", "export=none")  # the default sampler, DPM-Solver++-7, fits in T  # fmt: skip
+    summary = json.loads((out / "results.json").read_text())
+    assert summary["steps"] == 7 and summary["sampler"]["name"] == "dpmpp"
     from omegaconf import OmegaConf
 
     from motiondiff.cli.common import sampling_steps
