@@ -235,16 +235,21 @@ def refine_rotations(
 
 
 def fit_rotations(
-    positions: np.ndarray, skeleton: Skeleton, offsets: np.ndarray, *, twist_half_life: float = DEFAULT_TWIST_HALF_LIFE
+    positions: np.ndarray,
+    skeleton: Skeleton,
+    offsets: np.ndarray,
+    *,
+    twist_half_life: float = DEFAULT_TWIST_HALF_LIFE,
+    refine_above: float = REFINE_ABOVE_M,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(rotations, root, offsets) reproducing `positions` on `skeleton`: `solve_rotations`, exact for rigid bones,
-    then `refine_rotations` (rotations and bone lengths) where some joint is more than REFINE_ABOVE_M off."""
+    then `refine_rotations` (rotations and bone lengths) where some joint is more than `refine_above` metres off."""
     from motiondiff.kinematics import forward_kinematics
 
     rotations, root = solve_rotations(positions, skeleton, offsets, twist_half_life=twist_half_life)
     translations = np.repeat(np.asarray(offsets, dtype=np.float64)[None], len(rotations), axis=0)
     translations[:, 0] = root
     error = np.linalg.norm(forward_kinematics(rotations, translations, skeleton.parents)[0] - positions, axis=-1)
-    if error.max() > REFINE_ABOVE_M:
+    if error.max() > refine_above:
         rotations, offsets = refine_rotations(positions, skeleton, offsets, rotations, root)
     return rotations, root, offsets

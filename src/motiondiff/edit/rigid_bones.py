@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motiondiff.inverse_kinematics import fit_rest_offsets, refine_rotations, solve_rotations
+from motiondiff.inverse_kinematics import fit_rest_offsets, fit_rotations
 from motiondiff.kinematics import forward_kinematics
 from motiondiff.motion_checks import check_motion
 from motiondiff.skeleton import Skeleton
@@ -54,11 +54,9 @@ def rigid_bones(joints: np.ndarray, skeleton: Skeleton, fps: float) -> RigidBone
     """Joints (N, J, 3) refitted on one fixed skeleton (module doc)."""
     joints = check_motion(joints, skeleton, fps, "bone cleanup")
     offsets = fit_rest_offsets(joints, skeleton)
-    rotations, root = solve_rotations(joints, skeleton, offsets, twist_half_life=TWIST_HALF_LIFE_S * fps)
+    rotations, root, offsets = fit_rotations(joints, skeleton, offsets, twist_half_life=TWIST_HALF_LIFE_S * fps,
+                                             refine_above=FIT_ABOVE_M)  # fmt: skip
     fitted = _fk(rotations, root, offsets, skeleton)
-    if np.linalg.norm(fitted - joints, axis=-1).max() > FIT_ABOVE_M:
-        rotations, offsets = refine_rotations(joints, skeleton, offsets, rotations, root)
-        fitted = _fk(rotations, root, offsets, skeleton)
     move = np.linalg.norm(fitted - joints, axis=-1)
     spread = bone_length_range(joints, skeleton)
     return RigidBones(joints=fitted, offsets=offsets, max_move_m=float(move.max()), mean_move_m=float(move.mean()),

@@ -34,7 +34,7 @@ import numpy as np
 from motiondiff.atomic import atomic_write
 from motiondiff.errors import UsageError
 from motiondiff.export.bvh_export import TWIST_HALF_LIFE_S, ExportReport
-from motiondiff.inverse_kinematics import fit_rest_offsets, refine_rotations, solve_rotations
+from motiondiff.inverse_kinematics import fit_rest_offsets, fit_rotations
 from motiondiff.kinematics import forward_kinematics
 from motiondiff.motion_checks import check_motion
 from motiondiff.rotations import matrix_to_quat, qnormalize, quat_to_rotvec, rotvec_to_quat
@@ -50,7 +50,6 @@ __all__ = ["SMPL_NEUTRAL_PELVIS", "SmplLayoutError", "check_smpl_skeleton", "exp
 # offsets in skeleton.SMPL24_REST_OFFSETS.
 SMPL_NEUTRAL_PELVIS = np.array([-0.0018, -0.2233, 0.0282])
 NUM_BETAS = 10
-REFINE_ABOVE_M = 1e-3  # IK fits worse than this (bones that change length) are polished by `refine_rotations`
 SUPPORTED = "SMPL-22 (the HumanML3D skeleton of hml263 models) or SMPL-24 (the SMPL rig of HumanAct12/UESTC)"
 
 
@@ -127,15 +126,11 @@ def smpl_parameters(
     else:
         rest = _smpl_rest(count)
         offsets = fit_rest_offsets(joints, rest) if offsets is None else offsets
-        rotations, root = solve_rotations(joints, rest, offsets, twist_half_life=TWIST_HALF_LIFE_S * fps)
+        # polished where the bones are not rigid (generated joints)
+        rotations, root, offsets = fit_rotations(joints, rest, offsets, twist_half_life=TWIST_HALF_LIFE_S * fps)
         method = "ik"
     data = _smpl_arrays(rotations, root, offsets, fps)
-    distance = np.linalg.norm(smpl_joints(data)[:, :count] - joints, axis=-1)
-    if method == "ik" and distance.max() > REFINE_ABOVE_M:  # bones that are not rigid (generated joints)
-        rotations, offsets = refine_rotations(joints, _smpl_rest(count), offsets, rotations, root)
-        data = _smpl_arrays(rotations, root, offsets, fps)
-        distance = np.linalg.norm(smpl_joints(data)[:, :count] - joints, axis=-1)
-    return data, distance, method
+    return data, np.linalg.norm(smpl_joints(data)[:, :count] - joints, axis=-1), method
 
 
 def export_smpl_from_features(
