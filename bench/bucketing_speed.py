@@ -21,7 +21,6 @@ from hydra.utils import instantiate
 
 from motiondiff.bench import workloads
 from motiondiff.cli.common import REPO_DIR, register_resolvers
-from motiondiff.diffusion import GaussianDiffusion, make_betas
 from motiondiff.hardware import cpu_has_fast_bf16, cpu_model
 
 
@@ -32,22 +31,10 @@ def real_frames_per_second(overrides: list[str], bucketing: bool, steps: int, ba
     dm = instantiate(cfg.dataset.datamodule, batch_size=batch_size)
     dm.setup("fit")
     batches = list(itertools.islice(iter(dm.train_dataloader()), steps + 1))
-    model = workloads.build_denoiser("paper").train()
-    diffusion = GaussianDiffusion(make_betas("cosine", 1000), prediction="x0")
-    opt = torch.optim.AdamW(model.parameters(), lr=1e-4)
+    on_batch = workloads.batch_step("paper", bf16)
 
     def step(batch: dict) -> None:
-        x0, mask = batch["motion"], batch["mask"]
-        n = x0.shape[0]
-        t, noise = torch.randint(0, diffusion.num_steps, (n,)), torch.randn_like(x0)
-        with workloads.autocast(bf16):
-            out = model(diffusion.q_sample(x0, t, noise), t, cond=torch.randn(n, workloads.COND_DIM), mask=mask,
-                        drop_cond=torch.rand(n) < 0.1)  # fmt: skip
-            loss = diffusion.loss(out, x0, noise, t, mask=mask)
-        opt.zero_grad(set_to_none=True)
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
-        opt.step()
+        on_batch(batch["motion"], batch["mask"], torch.randn(batch["motion"].shape[0], workloads.COND_DIM))
 
     step(batches[0])  # warm-up
     start = time.perf_counter()

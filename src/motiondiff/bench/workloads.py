@@ -38,27 +38,37 @@ def random_batch(batch: int, frames: int, seed: int = 0) -> dict[str, torch.Tens
             "cond": torch.randn(batch, COND_DIM, generator=g), "mask": torch.ones(batch, frames, dtype=torch.bool)}  # fmt: skip
 
 
-def train_step(preset: str | dict, batch: int, frames: int, bf16: bool = False) -> Callable[[], float]:
-    """One MDM training step as train.py runs it: q_sample at random t, 10% condition drop, x0 loss, backward,
-    gradient clipping at 1.0 and AdamW."""
+def batch_step(preset: str | dict, bf16: bool = False) -> Callable[[torch.Tensor, torch.Tensor, torch.Tensor], float]:
+    """``step(x0, mask, cond)``: one MDM training step as train.py runs it on a batch (B, N, 263) with its valid-frame
+    mask (B, N) and caption features (B, 384): q_sample at random t, 10% condition drop, x0 loss, backward,
+    gradient clipping at 1.0 and AdamW, on one denoiser of ``preset`` kept across calls."""
     model = build_denoiser(preset).train()
     diffusion = GaussianDiffusion(make_betas("cosine", 1000), prediction="x0")
     opt = torch.optim.AdamW(model.parameters(), lr=1e-4)
-    data = random_batch(batch, frames)
 
-    def step() -> float:
-        x0, mask = data["x0"], data["mask"]
+    def step(x0: torch.Tensor, mask: torch.Tensor, cond: torch.Tensor) -> float:
+        batch = x0.shape[0]
         t = torch.randint(0, diffusion.num_steps, (batch,))
         noise = torch.randn_like(x0)
         with autocast(bf16):
-            out = model(diffusion.q_sample(x0, t, noise), t, cond=data["cond"], mask=mask,
-                        drop_cond=torch.rand(batch) < 0.1)  # fmt: skip
+            out = model(diffusion.q_sample(x0, t, noise), t, cond=cond, mask=mask, drop_cond=torch.rand(batch) < 0.1)
             loss = diffusion.loss(out, x0, noise, t, mask=mask)
         opt.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
         opt.step()
         return float(loss.detach())
+
+    return step
+
+
+def train_step(preset: str | dict, batch: int, frames: int, bf16: bool = False) -> Callable[[], float]:
+    """``batch_step`` on one fixed random batch of ``batch`` x ``frames`` frames (every frame valid)."""
+    on_batch = batch_step(preset, bf16)
+    data = random_batch(batch, frames)
+
+    def step() -> float:
+        return on_batch(data["x0"], data["mask"], data["cond"])
 
     return step
 
