@@ -53,7 +53,7 @@ def test_sample_guidedmotion_with_generated_local_actions_and_weights(latent_ckp
                    "hydra.run.dir=guided_out", env_dir=work)  # fmt: skip
     assert "GuidedMotion sample(s)" in proc.stdout
     result = json.loads((work / "guided_out" / "results.json").read_text())
-    assert result["level_steps"] == {"motion": 3, "action": 3, "specific": 4}
+    assert result["level_steps"] == {"motion": 3, "action": 3, "specific": 4} and result["sampler"] == "ddim"
     assert [a["text"] for a in result["local_actions"]] == ["walks forward", "raises both hands"]
     assert [a["weight"] for a in result["local_actions"]] == [2.0, 0.5]
     assert all(a["source"].startswith("generated") for a in result["local_actions"])
@@ -74,7 +74,8 @@ def test_bad_local_action_input_is_one_clear_error(latent_ckpt):
     pipe = GuidedMotionPipeline.from_pretrained(ckpt, local_model="text")
     for kwargs, message in [({"local_actions": ["walks forward"]}, "give one per action"),
                             ({"level_steps": (3, 3)}, "level_steps must be three"),
-                            ({"local_choice": 4}, "candidate index")]:  # fmt: skip
+                            ({"local_choice": 4}, "candidate index"),
+                            ({"sampler": "ddpm"}, "sampler must be auto or one of ddim, dpmpp")]:  # fmt: skip
         with pytest.raises(UsageError, match=message):
             pipe(CAPTION, seconds=2, **{"level_steps": (2, 2, 2), **kwargs})
 
@@ -142,6 +143,8 @@ def test_guided_pipeline_from_python(latent_ckpt):
     out = pipe(CAPTION, seconds=3, num_samples=2, level_steps=(3, 3, 4), local_weights=[2, 0.5])
     assert len(out) == 2 and out.joints[0].shape == (60, 22, 3) and np.isfinite(out.joints[0]).all()
     assert [a["weight"] for a in out.info["local_actions"]] == [2.0, 0.5]
+    fast = pipe(CAPTION, seconds=3, level_steps=(3, 3, 4), local_weights=[2, 0.5], sampler="dpmpp")
+    assert fast.info["sampler"] == "dpmpp" and np.isfinite(fast.joints[0]).all()
     with pytest.raises(UsageError, match="one per action"):
         pipe(CAPTION, local_weights=[1.0])
 

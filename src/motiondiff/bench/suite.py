@@ -28,6 +28,7 @@ from motiondiff.bench.flops import count_flops, matmul_flops_per_s
 from motiondiff.bench.report import machine
 from motiondiff.bench.timing import PeakMemory, median_seconds
 from motiondiff.bench.workloads import TINY
+from motiondiff.lit.diffusion import SAMPLER_STEPS
 from motiondiff.models.denoiser import PRESETS
 
 
@@ -144,8 +145,8 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "", co
     module = load_module(find_checkpoint(model, REPO_DIR / "outputs"))
     guidance = module.default_guidance
     name, steps = default_sampler()
-    if name == "ddim" and steps is None:
-        steps = 50  # DDIM's default
+    name = module.resolve_sampler(name)  # sampler=auto: the model's own
+    steps = SAMPLER_STEPS[name] if steps is None else steps
     chains = [("ddpm", None), ("ddim", 50), ("ddim", 10)]
     if (name, steps) not in chains:
         chains.append((name, steps))

@@ -13,6 +13,7 @@ from collections.abc import Callable
 import torch
 
 from motiondiff.diffusion import GaussianDiffusion, make_betas
+from motiondiff.models.bf16_inference import bf16_inference
 from motiondiff.models.denoiser import PRESETS, MDMDenoiser
 
 FEATURE_DIM = 263  # HumanML3D features
@@ -170,7 +171,7 @@ def feature_sampling(preset: str | dict, frames: int, sampler: str, steps: int |
                      timed_steps: int | None = None, bf16: bool = False) -> tuple[Callable[[], object], int, int]:  # fmt: skip
     """One motion from random caption features with a randomly initialised denoiser of ``preset``: the samplers'
     guided loop (DDIM, DDPM or DPM-Solver++, cosine 1000-step process, x0 prediction, no x̂0 clipping; the denoiser
-    under bf16 autocast with ``bf16``) without a checkpoint, to compare with the official code on the same sizes.
+    in bf16 with ``bf16``, as sampling runs it: `bf16_inference`) without a checkpoint, to compare with the official code on the same sizes.
     Returns (run, steps_total, steps_run) as ``sampling`` does."""
     from motiondiff.diffusion.dpm_solver import dpmpp_sample
     from motiondiff.diffusion.guidance import guided_model_fn
@@ -191,7 +192,7 @@ def feature_sampling(preset: str | dict, frames: int, sampler: str, steps: int |
 
     def run():
         reset()
-        with contextlib.suppress(_Stop), autocast(bf16):
+        with contextlib.suppress(_Stop), bf16_inference(model, "cpu", bf16):
             loop(diffusion, fn, (1, frames, FEATURE_DIM), steps=steps, xt_hook=hook)
 
     return run, total, limit

@@ -50,8 +50,19 @@ def _instantiate(cfg):
         raise
 
 
+def resolve_sampler(cfg: DictConfig, module) -> None:
+    """``sampler=auto`` replaced by the model's own default sampler's config (conf/sampler/<name>.yaml), so what runs
+    and what results.json records is a named sampler with its steps."""
+    from omegaconf import OmegaConf
+
+    if cfg.sampler.get("name") == "auto":
+        cfg.sampler = OmegaConf.load(REPO_DIR / "conf" / "sampler" / f"{module.resolve_sampler('auto')}.yaml")
+
+
 def sampling_steps(cfg: DictConfig, module) -> int | None:
-    """``steps=`` (or the sampler's default) fitted to the model's diffusion steps (``lit.generation.fitted_steps``)."""
+    """``steps=`` (or the sampler's default) fitted to the model's diffusion steps (``lit.generation.fitted_steps``),
+    once ``sampler=auto`` is resolved to the model's own sampler (`resolve_sampler`)."""
+    resolve_sampler(cfg, module)
     return fitted_steps(module, None if cfg.steps is None else int(cfg.steps), cfg.sampler.steps)
 
 

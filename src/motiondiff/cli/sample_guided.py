@@ -79,7 +79,7 @@ def run(cfg: DictConfig) -> Path:
     result = pipe(text, seconds=frames / fps, num_samples=int(cfg.num_samples), local_actions=_list(cfg.local_actions),
                   local_weights=weights, local_candidates=int(cfg.local_candidates), local_choice=_choice(cfg.local_choice),
                   level_steps=tuple(steps[level] for level in LEVELS), guidance=cfg.guidance, rho=float(cfg.rho),
-                  seed=int(cfg.seed))  # fmt: skip
+                  seed=int(cfg.seed), sampler=str(cfg.sampler.name))  # fmt: skip
     rows = save_samples(
         out,
         text,
@@ -92,7 +92,8 @@ def run(cfg: DictConfig) -> Path:
         body=body,
     )
     summary = {
-        "method": "guidedmotion", "checkpoint": str(path), "text": text, "level_steps": steps, "rho": float(cfg.rho),
+        "method": "guidedmotion", "checkpoint": str(path), "text": text, "sampler": result.info["sampler"],
+        "level_steps": steps, "rho": float(cfg.rho),
         "guidance": module.hparams.sampling.get("guidance", 7.5) if cfg.guidance is None else float(cfg.guidance),
         "local_actions": result.info["local_actions"],
         "samples": rows,

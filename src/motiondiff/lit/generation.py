@@ -12,6 +12,7 @@ import torch
 
 from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import condition_batch
+from motiondiff.models.bf16_inference import bf16_inference
 
 
 def fitted_steps(module, steps, default: int | None) -> int | None:
@@ -35,8 +36,9 @@ def feed_forward_shape(module, motions: int, frames: int) -> tuple[int, int, int
 
 def sampling_precision(module, precision: str = "32-true"):
     """The context the denoiser samples in: bf16 autocast for "bf16-mixed" (as such models train; the sampler's own
-    arithmetic stays float32), full precision for anything else."""
-    return torch.autocast(module.device.type, dtype=torch.bfloat16, enabled=str(precision).startswith("bf16"))
+    arithmetic stays float32) with the matmul weights cast once rather than at every step, full precision for
+    anything else."""
+    return bf16_inference(module, module.device.type, enabled=str(precision).startswith("bf16"))
 
 
 @torch.inference_mode()

@@ -25,7 +25,7 @@ from motiondiff.guided.local_actions import (
     local_descriptions,
 )
 from motiondiff.lit.conditions import text_encoder_kwargs
-from motiondiff.lit.latent import HierarchicalLatentModule
+from motiondiff.lit.latent import LATENT_SAMPLERS, HierarchicalLatentModule
 from motiondiff.lit.loading import load_model
 from motiondiff.models.hierarchical import LEVELS
 from motiondiff.pipelines.motion import resolve_model
@@ -79,9 +79,11 @@ class GuidedMotionPipeline:
         guidance: float | None = None,
         rho: float = 0.01,
         seed: int = 0,
+        sampler: str = "auto",
     ) -> MotionOutput:
         """``num_samples`` motions of the caption ``text``; ``local_weights``: one per local action (0 turns its
-        guidance off); ``level_steps``: DDIM steps of the motion, action and specific levels (the paper: 15, 15, 20)."""
+        guidance off); ``level_steps``: sampler steps of the motion, action and specific levels (the paper: DDIM with
+        15, 15, 20); ``sampler``: ddim, dpmpp (DPM-Solver++(2M)) or auto (the model's own, else ddim)."""
         if not isinstance(text, str) or not text.strip():
             raise UsageError("the caption is empty: describe the motion, e.g. 'a person walks, then waves'")
         frames = round(float(seconds) * self.fps)
@@ -91,6 +93,9 @@ class GuidedMotionPipeline:
         if isinstance(num_samples, bool) or not isinstance(num_samples, int) or num_samples < 1:
             raise UsageError(f"num_samples must be a whole number >= 1, got {num_samples!r}")
         steps = level_steps_of(self.latent, level_steps)
+        sampler = (self.latent.hparams.sampling or {}).get("sampler", "ddim") if sampler == "auto" else sampler
+        if sampler not in LATENT_SAMPLERS:
+            raise UsageError(f"sampler must be auto or one of {', '.join(LATENT_SAMPLERS)}, got {sampler!r}")
         generator = torch.Generator(device=self.latent.device).manual_seed(int(seed))
         try:
             _, described = local_descriptions(text)
@@ -102,14 +107,15 @@ class GuidedMotionPipeline:
                                              generator=generator)  # fmt: skip
             feats = guided_sample(self.latent, graph, self._text_encoder(), local, torch.full((num_samples,), frames),
                                   weights=local_weights, guidance=guidance, steps=steps, rho=float(rho),
-                                  generator=generator)  # fmt: skip
+                                  generator=generator, sampler=sampler)  # fmt: skip
         except LocalActionError as err:
             raise UsageError(str(err)) from None
         feats = [f for f in self.latent.denormalise(feats).cpu().numpy()]
         rep = self.latent.decoder.representation
         joints = [rep.decode_numpy(f).astype(np.float32) for f in feats]
         weights = [1.0] * len(local.texts) if local_weights is None else [float(w) for w in local_weights]
-        info = {"method": "guidedmotion", "model": self.source, "level_steps": steps, "rho": float(rho), "seed": seed,
+        info = {"method": "guidedmotion", "model": self.source, "sampler": sampler, "level_steps": steps,
+                "rho": float(rho), "seed": seed,
                 "local_actions": [{"text": t, "source": s, "weight": w}
                                   for t, s, w in zip(local.texts, local.sources, weights, strict=True)]}  # fmt: skip
         return MotionOutput(joints, feats, [text] * num_samples, self.fps, rep.skeleton, rep, info)

@@ -96,7 +96,7 @@ class MotionPipeline:
         seconds: float | list[float] = 4.0,
         num_samples: int = 1,
         guidance: float | None = None,
-        sampler: str = "dpmpp",
+        sampler: str = "auto",
         steps: int | None = None,
         eta: float = 0.0,
         seed: int = 0,
@@ -104,8 +104,8 @@ class MotionPipeline:
     ) -> MotionOutput:
         """``num_samples`` motions per prompt: texts (text models), action names or ids (action models) or None
         (unconditioned); one prompt or a list. ``seconds``: one length, or one per prompt. ``guidance``: the
-        classifier-free guidance scale (None: the model's default); ``sampler``: dpmpp (DPM-Solver++(2M), the
-        default), ddim or ddpm; ``steps``: sampler steps (None: 7 for DPM-Solver++, 50 for DDIM, the whole chain for
+        classifier-free guidance scale (None: the model's default); ``sampler``: auto (the model's own default:
+        DPM-Solver++(2M) unless its recipe chose another on val), dpmpp, ddim or ddpm; ``steps``: sampler steps (None: 7 for DPM-Solver++, 50 for DDIM, the whole chain for
         DDPM, at most the model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
         prompts = self._prompts(prompt)
         lengths = [self._frames(s) for s in self._per_prompt(seconds, len(prompts), "seconds")]
@@ -254,8 +254,9 @@ class MotionPipeline:
         guidance = self.model.default_guidance if guidance is None else guidance
         if isinstance(guidance, bool) or not isinstance(guidance, int | float) or not 0 <= guidance < float("inf"):
             raise UsageError(f"guidance must be a number >= 0, got {guidance!r}")
-        if sampler not in SAMPLER_STEPS:
-            raise UsageError(f"sampler must be one of {', '.join(SAMPLER_STEPS)}, got {sampler!r}")
+        if sampler not in ("auto", *SAMPLER_STEPS):
+            raise UsageError(f"sampler must be auto or one of {', '.join(SAMPLER_STEPS)}, got {sampler!r}")
+        sampler = self.model.resolve_sampler(sampler)
         steps = fitted_steps(self.model, steps, SAMPLER_STEPS[sampler])
         return {"guidance": float(guidance), "sampler": sampler, "steps": steps, "eta": float(eta)}
 

@@ -114,6 +114,7 @@ def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tupl
 
     model = pipe.model
     frames = torch.full((n,), round(seconds * pipe.fps))
+    sampler = model.resolve_sampler(sampler)
     steps = fitted_steps(model, steps, SAMPLER_STEPS.get(sampler))
     generator = torch.Generator(device=model.device).manual_seed(int(seed))
     feats = generate_features(model, [None] * n, frames, generator=generator, sampler=sampler, steps=steps)

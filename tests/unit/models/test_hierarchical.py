@@ -153,7 +153,8 @@ def test_cached_latents_equal_fresh_encodings_and_key_on_the_window(setup):
     module.set_latent_stats([batch])
 
 
-def test_energy_guidance_pulls_the_action_latent_towards_a_local_action(setup):
+@pytest.mark.parametrize("sampler", ["ddim", "dpmpp"])
+def test_energy_guidance_pulls_the_action_latent_towards_a_local_action(setup, sampler):
     module, _ = setup
     graphs = module.graphs_of([CAPTIONS[0]])
     lengths = torch.tensor([30])
@@ -162,11 +163,15 @@ def test_energy_guidance_pulls_the_action_latent_towards_a_local_action(setup):
     for w in (0.0, 1.0, 20.0):
         weights = torch.tensor([[w, 0.0]])
         feats, latents = module.sample(graphs, lengths, steps={"motion": 5, "action": 5, "specific": 5},
-                                       local_latents=target, local_weights=weights, rho=0.05,
+                                       local_latents=target, local_weights=weights, rho=0.05, sampler=sampler,
                                        generator=torch.Generator().manual_seed(0), return_latents=True)  # fmt: skip
         distances.append(float((latents["action"] - target[:, 0]).norm()))
-        assert feats.shape == (1, 30, module.hparams.vaes["motion"]["feature_dim"])
+        assert feats.shape == (1, 30, module.hparams.vaes["motion"]["feature_dim"]) and torch.isfinite(feats).all()
     assert distances[0] > distances[1] > distances[2]
+    if sampler == "dpmpp":
+        with pytest.raises(ValueError, match="sampler must be one of ddim, dpmpp"):
+            module.sample(graphs, lengths, steps={"motion": 2, "action": 2, "specific": 2}, sampler="ddpm")
+        return
     few = {"motion": 2, "action": 2, "specific": 2}
     for level, levels in (("motion", {"motion"}), ("action", {"motion", "action"})):  # Tab. 4's ablation rows
         feats, latents = module.sample(graphs, lengths, steps=few, final_level=level, return_latents=True,

@@ -32,10 +32,14 @@ def test_text_to_motion_and_reproducible_seeds(pipe):
     assert out.info["steps"] == 5 and out.info["guidance"] == pipe.model.default_guidance
 
 
-def test_the_default_sampler_is_dpmpp_with_its_default_steps(pipe):
+def test_the_default_sampler_is_the_models_own(pipe, monkeypatch):
     out = pipe("a person walks forward", seconds=1)
     assert out.info["sampler"] == "dpmpp" and out.info["steps"] == 7 and np.isfinite(out.joints[0]).all()
     assert pipe("a person walks forward", seconds=1, sampler="ddim").info["steps"] == 50
+    monkeypatch.setitem(pipe.model.hparams.model, "sample_sampler", "ddim")  # a recipe that chose DDIM on val
+    assert pipe("a person walks forward", seconds=1, steps=3).info["sampler"] == "ddim"
+    with pytest.raises(UsageError, match="sampler must be auto or one of"):
+        pipe("a person walks forward", seconds=1, sampler="euler")
 
 
 def test_save_and_export(pipe, tmp_path):
@@ -72,6 +76,7 @@ def test_action_model_takes_action_names():
     pipe = MotionPipeline.from_pretrained("action")
     out = pipe(pipe.actions[:2], seconds=1, steps=3)
     assert out.prompts == pipe.actions[:2] and pipe.condition_kind == "action"
+    assert out.info["sampler"] == "ddim"  # its recipe kept DDIM-50: DPM-Solver++-7 missed its val FID
     with pytest.raises(UsageError, match="unknown action 'fly'"):
         pipe("fly")
 

@@ -1,0 +1,69 @@
+"""bf16_inference gives autocast's numbers (bit for bit where the backbone's kernels do not depend on the weights'
+dtype; the decoder's self-attention takes the other attention kernel, same bf16 error), and leaves the float32 weights exactly as they were (after
+an error and after nested or overlapping uses too)."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+from motiondiff.models.bf16_inference import bf16_inference
+from motiondiff.models.denoiser import MDMDenoiser
+
+SMALL = dict(d_model=32, num_layers=2, num_heads=2, ff_size=64, dropout=0.1, activation="gelu")
+
+
+def _denoiser(backbone: str) -> MDMDenoiser:
+    torch.manual_seed(0)
+    return MDMDenoiser.from_config(12, preset=SMALL, backbone=backbone, cond_dim=16).eval()
+
+
+def _inputs():
+    g = torch.Generator().manual_seed(1)
+    x = torch.randn(2, 24, 12, generator=g)
+    return x, torch.tensor([3, 700]), torch.randn(2, 16, generator=g), torch.ones(2, 24, dtype=torch.bool)
+
+
+def _snapshot(model):
+    return {name: (p.dtype, p.detach().clone()) for name, p in model.named_parameters()}
+
+
+@pytest.mark.parametrize("backbone", ["trans_enc", "trans_dec", "gru", "unet"])
+def test_autocasts_numbers_and_weights_restored(backbone):
+    model = _denoiser(backbone)
+    x, t, cond, mask = _inputs()
+    before = _snapshot(model)
+    with torch.inference_mode():
+        full = model(x, t, cond=cond, mask=mask)
+        with torch.autocast("cpu", dtype=torch.bfloat16):
+            expected = model(x, t, cond=cond, mask=mask)
+        with bf16_inference(model, "cpu"):
+            assert any(p.dtype == torch.bfloat16 for p in model.parameters())
+            got = model(x, t, cond=cond, mask=mask)
+    if backbone == "trans_dec":
+        autocast_error = (expected.float() - full).abs().max()
+        assert (got.float() - full).abs().max() <= 1.5 * autocast_error and autocast_error < 0.05
+    else:
+        assert torch.equal(got, expected)
+    after = _snapshot(model)
+    assert all(after[k][0] == torch.float32 and torch.equal(after[k][1], before[k][1]) for k in before)
+
+
+def test_restored_after_an_error_and_only_when_the_outermost_use_ends():
+    model = _denoiser("trans_enc")
+    before = _snapshot(model)
+    with pytest.raises(RuntimeError, match="boom"), bf16_inference(model, "cpu"):
+        with bf16_inference(model, "cpu"):
+            pass
+        assert model.output_proj.weight.dtype == torch.bfloat16  # the inner exit did not restore
+        raise RuntimeError("boom")
+    after = _snapshot(model)
+    assert all(after[k][0] == torch.float32 and torch.equal(after[k][1], before[k][1]) for k in before)
+
+
+def test_disabled_is_full_precision():
+    model = _denoiser("trans_enc")
+    x, t, cond, mask = _inputs()
+    with torch.autocast("cpu", dtype=torch.bfloat16), bf16_inference(model, "cpu", enabled=False):
+        out = model(x, t, cond=cond, mask=mask)
+    assert out.dtype == torch.float32 and all(p.dtype == torch.float32 for p in model.parameters())
