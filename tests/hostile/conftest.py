@@ -1,0 +1,51 @@
+"""Hostile and careless input through the installed commands, as subprocesses (never `run(cfg)` in-process: what a
+user sees is the process's stderr, exit code and the files it leaves).
+
+`run_cli(tmp, "sample", "length=abc")` runs ``motiondiff-sample`` in ``tmp`` with outputs under ``tmp/outputs``;
+`assert_refused(proc, "length")` checks exit code 2, one ``error: ...`` line naming the problem, no traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+BIN = Path(sys.executable).parent
+
+
+def command(name: str) -> list[str]:
+    """The installed console script ``motiondiff-<name>``, or ``python -m <module>`` for a dotted name."""
+    if "." in name:
+        return [sys.executable, "-m", name]
+    script = BIN / f"motiondiff-{name}"
+    if not script.exists():
+        raise FileNotFoundError(f"{script} is not installed: run `make setup` (pip install -e .)")
+    return [str(script)]
+
+
+def run_cli(tmp: Path, name: str, *args: str, timeout: float = 300, env: dict | None = None, stdin=None,
+            check_paths: bool = True) -> subprocess.CompletedProcess:  # fmt: skip
+    """Run a command in ``tmp`` (its outputs under ``tmp/outputs``; hydra.run.dir is not set, so run-folder rules
+    are tested too)."""
+    full_env = {**os.environ, "MOTIONDIFF_OUTPUT_DIR": str(tmp / "outputs"), "HYDRA_FULL_ERROR": "0", **(env or {})}
+    return subprocess.run([*command(name), *args], cwd=tmp, env=full_env, capture_output=True, text=True,
+                          timeout=timeout, stdin=stdin)  # fmt: skip
+
+
+def assert_refused(proc: subprocess.CompletedProcess, *needles: str, code: int = 2) -> str:
+    """Exit ``code``, exactly one ``error: ...`` line on stderr that contains every needle (case-insensitive), and no
+    traceback anywhere. Returns the line."""
+    assert "Traceback" not in proc.stderr + proc.stdout, proc.stderr[-3000:]
+    assert proc.returncode == code, f"exit {proc.returncode}, expected {code}\n{proc.stderr[-3000:]}"
+    errors = [line for line in proc.stderr.splitlines() if line.startswith("error: ")]
+    assert len(errors) == 1, f"expected one error line, got {len(errors)}:\n{proc.stderr[-3000:]}"
+    for needle in needles:
+        assert needle.lower() in errors[0].lower(), f"{needle!r} not in {errors[0]!r}"
+    return errors[0]
+
+
+def files_under(path: Path) -> list[str]:
+    return sorted(str(p.relative_to(path)) for p in path.rglob("*") if p.is_file()) if path.exists() else []
