@@ -25,3 +25,18 @@ def atomic_write(path: str | os.PathLike, write: Callable[[str], object], suffix
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def save_npy(path: str | os.PathLike, array) -> Path:
+    """``np.save`` through `atomic_write`: a crash or a full disk leaves no truncated array under the final name."""
+    import numpy as np
+
+    return atomic_write(path, lambda tmp: np.save(tmp, array), suffix=".npy")
+
+
+def write_json(path: str | os.PathLike, data, **dumps) -> Path:
+    """JSON through `atomic_write`, strict: a NaN or infinity is an error here, never a bare ``NaN`` in the file."""
+    import json
+
+    text = json.dumps(data, indent=1, allow_nan=False, **dumps)
+    return atomic_write(path, lambda tmp: Path(tmp).write_text(text))

@@ -3,16 +3,22 @@ config resolvers, offline project-local tool caches, one-line user errors, key=v
 
 from __future__ import annotations
 
-import functools
 import os
+import re
+import secrets
 import sys
 from pathlib import Path
 
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError
+from motiondiff.boundary import USER_ERRORS, guarded, run_folder  # noqa: F401  (USER_ERRORS re-exported)
 from motiondiff.errors import UsageError
 from motiondiff.paths import REPO_DIR, work_dir
+
+# This process's part of its run folder's name (pid and a random token, fixed for the process): two runs started in
+# the same second never share a folder.
+RUN_ID = f"{os.getpid():x}{secrets.token_hex(2)}"
+USER_TEXT_KEYS = ("text", "prompts", "action", "prompt", "captions")  # user text: data, never interpolated
 
 
 def register_resolvers() -> None:
@@ -20,6 +26,8 @@ def register_resolvers() -> None:
         OmegaConf.register_new_resolver("repo_dir", lambda: str(REPO_DIR))
     if not OmegaConf.has_resolver("work_dir"):
         OmegaConf.register_new_resolver("work_dir", lambda: str(work_dir()))
+    if not OmegaConf.has_resolver("run_id"):
+        OmegaConf.register_new_resolver("run_id", lambda: RUN_ID)
     if not OmegaConf.has_resolver("fast_cpu_precision"):
         from motiondiff.hardware import fast_cpu_precision
 
@@ -39,21 +47,31 @@ def quiet_tool_caches() -> None:
     os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")
 
 
-USER_ERRORS = (UsageError, DatasetNotFoundError, RepresentationError)  # reported as one line, exit code 2
-
-
 def user_errors(fn):
-    """Report user errors as one clear line instead of a traceback."""
+    """Report expected failures as one clear line instead of a traceback (``boundary.guarded``): exit code 2, and
+    130 for Ctrl-C."""
+    return guarded(fn)
 
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        try:
-            return fn(*args, **kwargs)
-        except USER_ERRORS as err:
-            print(f"error: {err}", file=sys.stderr)
-            sys.exit(2)
 
-    return wrapper
+def literal(text: str) -> str:
+    """``text`` as OmegaConf stores it literally: ``${...}`` escaped, so a prompt is never resolved as config."""
+    return text.replace("${", "\\${")
+
+
+def literal_user_text(cfg: DictConfig) -> None:
+    """Make the user-text keys (``USER_TEXT_KEYS``) literal in place: ``text='${oc.env:HOME}'`` stays that text."""
+    for key in USER_TEXT_KEYS:
+        if key not in cfg:
+            continue
+        node = cfg._get_node(key)
+        raw = node._value() if node is not None else None
+        if isinstance(raw, str) and "${" in raw:
+            cfg[key] = literal(raw)
+        elif isinstance(node, ListConfig):
+            for i in range(len(node)):
+                item = node._get_node(i)._value()
+                if isinstance(item, str) and "${" in item:
+                    node[i] = literal(item)
 
 
 def key_value_args(argv: list[str], keys) -> dict[str, str]:
@@ -87,4 +105,75 @@ def run_hydra(config_name: str, run) -> None:
     quiet_tool_caches()
     if not any(a.startswith("hydra.job.name=") for a in sys.argv[1:]):  # log files named after the command
         sys.argv.append(f"hydra.job.name={config_name}")
-    hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name=config_name)(user_errors(run))()
+    check_overrides(config_name, sys.argv[1:])
+
+    def task(cfg: DictConfig):
+        from hydra.core.hydra_config import HydraConfig
+
+        hydra_cfg = HydraConfig.get()
+        with run_folder(Path(hydra_cfg.runtime.output_dir), hydra_cfg.job.name):
+            literal_user_text(cfg)
+            return run(cfg)
+
+    hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name=config_name)(guarded(task))()
+
+
+def check_overrides(config_name: str, argv: list[str]) -> None:
+    """Compose the config with the command line's overrides once before Hydra's run, so a misspelt key, a missing
+    config group option or a syntax error is one ``error:`` line and exit code 2 (Hydra's own report is several
+    lines and exit code 1), and no run folder is made. Sweeps (-m) and Hydra's flags are left to Hydra."""
+    if any(a.startswith("-") for a in argv):
+        return
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+    from hydra.errors import HydraException
+    from omegaconf.errors import OmegaConfBaseException
+
+    from motiondiff.paths import CONF_DIR
+
+    try:
+        with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+            cfg = compose(config_name, overrides=[a for a in argv if not a.startswith("hydra.job.name=")],
+                          return_hydra_config=True)  # fmt: skip
+    except (HydraException, OmegaConfBaseException) as err:
+        print(f"error: {_override_error(err)}", file=sys.stderr)
+        sys.exit(2)
+    finally:
+        GlobalHydra.instance().clear()
+    try:
+        run_dir = Path(str(OmegaConf.select(cfg, "hydra.run.dir")))
+    except OmegaConfBaseException:
+        return  # resolved by Hydra at run time only
+    guarded(check_writable)(run_dir)
+
+
+def check_writable(folder: Path) -> None:
+    """Whether ``folder`` can be made (a trial folder in its nearest existing parent), so a run folder that cannot
+    be created fails as one line before Hydra tries."""
+    import tempfile
+
+    folder = folder.absolute()
+    parent = next((p for p in (folder, *folder.parents) if p.exists()), None)
+    if parent is None or not parent.is_dir():
+        raise UsageError(f"cannot make the run folder {folder}: {parent} is a file, not a folder (set another "
+                         "paths.output_dir= or hydra.run.dir=)")  # fmt: skip
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".motiondiff-check-", dir=parent))
+    except OSError as err:
+        raise UsageError(f"cannot make the run folder {folder} ({err.strerror} in {parent}): set a writable "
+                         "paths.output_dir= or hydra.run.dir=") from None  # fmt: skip
+
+
+def _override_error(err: Exception) -> str:
+    """Hydra's several-line composition error as one line that names the setting and what is allowed."""
+    text = str(err)
+    unknown = re.match(r"Could not override '([^']+)'", text)
+    if unknown and "not in struct" in f"{text} {err.__cause__}" or unknown and "To append" in text:
+        return f"unknown setting {unknown.group(1)!r}: check its spelling (`--cfg job` lists the settings)"
+    lines = [line.strip() for line in text.split("Config search path")[0].splitlines() if line.strip()]
+    lines = [line for line in lines if not line.startswith(("full_key:", "object_type", "reference_type"))]
+    head, _, options = "\n".join(lines).partition("Available options in")
+    if options:
+        group, _, names = options.partition(":")
+        return f"{head.strip()}; {group.strip()} is one of {', '.join(names.split())}"
+    return "; ".join(lines)

@@ -4,16 +4,15 @@ edited joints, features, the input, stick-figure videos and results.json with ho
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-import numpy as np
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
+from motiondiff.atomic import save_npy, write_json
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps
 from motiondiff.cli.sample import cleanup_option, export_formats, slug
-from motiondiff.cli.validate import RULES_SAMPLE, check
+from motiondiff.cli.validate import RULES_EDIT, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.cleanups import apply_cleanups, check_for_edit
 from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
@@ -81,7 +80,7 @@ def _check(cfg: DictConfig, module) -> int | None:
 
 
 def run(cfg: DictConfig) -> Path:
-    check(cfg, RULES_SAMPLE)  # types and ranges before any work
+    check(cfg, RULES_EDIT)  # types and ranges before any work
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     formats, cleanup = export_formats(cfg), cleanup_option(cfg)
     check_for_edit(cleanup)
@@ -131,7 +130,7 @@ def run(cfg: DictConfig) -> Path:
         "settings": {**result.settings, "clip_x0": module.clip_rule},
         "samples": rows,
     }  # fmt: skip
-    (out / "results.json").write_text(json.dumps(summary, indent=1))
+    write_json(out / "results.json", summary)
     for r in rows:
         extra = (f"max boundary ratio {r['max_boundary_ratio']:.2f}" if result.kind == "inbetween"
                  else f"root-relative kept error {r['root_relative_kept_max_error_m']:.1e} m")  # fmt: skip
@@ -150,7 +149,7 @@ def save_edits(
     rep = module.representation
     title = f"{result.kind}: {condition or 'unconditioned'}"
     inputs = export_features(out / "input", rep, motion.features, fps, formats, title="input", rig_names=rig_names)
-    np.save(out / "keep_mask.npy", result.keep[0])
+    save_npy(out / "keep_mask.npy", result.keep[0])
     rows = []
     for k in range(len(result)):
         stem = out / f"{result.kind}_{slug(condition)}_{k:02d}"
@@ -158,11 +157,11 @@ def save_edits(
                  "input_joints": f"{stem}_input_joints.npy"}  # fmt: skip
         joints, cleaned = result.joints[k], {}
         if cleanup:
-            np.save(f"{stem}_joints_raw.npy", joints)
+            save_npy(f"{stem}_joints_raw.npy", joints)
             joints, cleaned = apply_cleanups(joints, rep.skeleton, fps, cleanup, keep=result.kept_points(k))
-        np.save(files["joints"], joints)
-        np.save(files["features"], result.features[k])
-        np.save(files["input_joints"], result.input_joints[k])
+        save_npy(files["joints"], joints)
+        save_npy(files["features"], result.features[k])
+        save_npy(files["input_joints"], result.input_joints[k])
         exports = export_features(stem, rep, result.features[k], fps, formats, title=title,
                                   joints=joints if cleaned else None, rig_names=rig_names)  # fmt: skip
         rows.append({"index": k, **files, "video": exports.get("mp4", exports.get("gif")), "exports": exports,

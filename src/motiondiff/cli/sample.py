@@ -10,7 +10,6 @@ ground contacts (`edit.foot_cleanup`)."""
 from __future__ import annotations
 
 import copy
-import json
 import math
 import re
 from dataclasses import asdict
@@ -21,6 +20,7 @@ import torch
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
+from motiondiff.atomic import save_npy, write_json
 from motiondiff.cli.common import (
     UsageError,
     apply_clip_x0,
@@ -42,6 +42,7 @@ from motiondiff.lit.conditions import check_action, check_text, generation_frame
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.lit.generation import feed_forward_shape, generate_features, sampling_precision
 from motiondiff.lit.loading import load_model
+from motiondiff.scripting import literal
 from motiondiff.studies.behaviour import mean_joint_speed
 
 # "<text>:<seconds>", seconds a positive decimal, optionally "4s"; a colon not followed by a number is text
@@ -124,7 +125,7 @@ def split_timed(cfg: DictConfig) -> tuple[DictConfig, list[float] | None]:
         return cfg, None
     plain = copy.deepcopy(cfg)
     plain.prompts_file = None
-    plain["action" if key == "action" else "prompts"] = [text for text, _ in timed]
+    plain["action" if key == "action" else "prompts"] = [literal(text) for text, _ in timed]  # data, not config
     return plain, [seconds for _, seconds in timed]
 
 
@@ -167,7 +168,7 @@ def run(cfg: DictConfig) -> Path:
         with sampling_precision(module, precision):
             summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats,
                                        cleanup, body))  # fmt: skip
-        (out / "results.json").write_text(json.dumps(summary, indent=1))
+        write_json(out / "results.json", summary)
         print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
         return out
     results = []
@@ -182,7 +183,7 @@ def run(cfg: DictConfig) -> Path:
             out, prompt, feats, module, formats, sigma, cleanup=cleanup, rig_names=cfg.get("bvh_names"), body=body
         )
     summary["samples"] = results
-    (out / "results.json").write_text(json.dumps(summary, indent=1))
+    write_json(out / "results.json", summary)
     print(f"\n{len(results)} sample(s) written to {out}")
     return out
 
@@ -306,7 +307,7 @@ def save_samples(
         feature_joints = joints if bridge.identity else bridge.joints(f)  # SMPL-22/KIT-21, what `measure` reads
         smoothing = None
         if sigma is not None:
-            np.save(f"{stem_k}_joints_raw.npy", joints)
+            save_npy(f"{stem_k}_joints_raw.npy", joints)
             before = smoothness_of_joints(feature_joints, bridge.feature_skeleton)
             joints, feature_joints = smooth_joints(joints, sigma), smooth_joints(feature_joints, sigma)
             after = smoothness_of_joints(feature_joints, bridge.feature_skeleton)
@@ -315,12 +316,12 @@ def save_samples(
         cleaned = {}
         if cleanup:
             if sigma is None:
-                np.save(f"{stem_k}_joints_raw.npy", joints)
+                save_npy(f"{stem_k}_joints_raw.npy", joints)
             joints, cleaned = apply_cleanups(joints, rep.skeleton, fps, cleanup)
             if not bridge.identity:  # the measured joints get the same clean-ups on their own skeleton
                 feature_joints = apply_cleanups(feature_joints, bridge.feature_skeleton, fps, cleanup)[0]
-        np.save(f"{stem_k}_joints.npy", joints)
-        np.save(f"{stem_k}_features.npy", f.astype(np.float32))
+        save_npy(f"{stem_k}_joints.npy", joints)
+        save_npy(f"{stem_k}_features.npy", f.astype(np.float32))
         changed = sigma is not None or bool(cleanup)
         exports = export_features(stem_k, rep, f, fps, formats, title=title or prompt or "unconditioned",
                                   joints=joints if changed else None, rig_names=rig_names, body=body)  # fmt: skip

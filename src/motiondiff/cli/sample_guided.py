@@ -7,13 +7,13 @@ results.json lists each local action's description, source and weight, and the g
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
+from motiondiff.atomic import write_json
 from motiondiff.cli.common import UsageError, find_checkpoint
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
 from motiondiff.hardware import resolve_device
@@ -98,6 +98,6 @@ def run(cfg: DictConfig) -> Path:
         "local_actions": result.info["local_actions"],
         "samples": rows,
     }  # fmt: skip
-    (out / "results.json").write_text(json.dumps(summary, indent=1))
+    write_json(out / "results.json", summary)
     print(f"\n{len(rows)} GuidedMotion sample(s) of {text!r} written to {out}")
     return out

@@ -31,14 +31,9 @@ class Rule:
         if self.choices:
             return "one of " + ", ".join(map(str, self.choices))
         parts = ["an integer" if self.kind is int else "a number"]
-        if self.low is not None:
-            parts.append(f">= {self.low:g}")
-        if self.above is not None:
-            parts.append(f"> {self.above:g}")
-        if self.high is not None:
-            parts.append(f"<= {self.high:g}")
-        if self.below is not None:
-            parts.append(f"< {self.below:g}")
+        for sign, bound in ((">=", self.low), (">", self.above), ("<=", self.high), ("<", self.below)):
+            if bound is not None:  # an integer bound prints whole (2**63-1, not 9.22337e+18)
+                parts.append(f"{sign} {bound}" if isinstance(bound, int) else f"{sign} {bound:g}")
         return " ".join(parts) + (" (or null)" if self.optional else "")
 
     def accepts(self, value) -> bool:
@@ -58,7 +53,8 @@ class Rule:
 
 
 POSITIVE_INT = Rule(int, low=1)
-COMMON = {"seed": Rule(int), "paths.output_dir": Rule(str)}
+SEED = Rule(int, low=0, high=2**63 - 1)  # torch.Generator.manual_seed takes at most 64 bits
+COMMON = {"seed": SEED, "paths.output_dir": Rule(str)}
 MODEL = {"model.d_model": POSITIVE_INT, "model.num_layers": POSITIVE_INT, "model.num_heads": POSITIVE_INT,
          "model.ff_size": POSITIVE_INT, "model.dropout": Rule(float, low=0, below=1)}  # fmt: skip
 RULES_TRAIN = {
@@ -70,9 +66,19 @@ RULES_TRAIN = {
     "dataset.datamodule.max_frames": Rule(int, low=1, optional=True), "ema_decay": Rule(float, low=0, below=1),
     "representation": Rule(str, choices=REPRESENTATIONS, optional=True),
 }  # fmt: skip
-# length, frames, guidance and steps are checked by sample/edit against the loaded model (its maximum length and
-# diffusion steps), with messages that say so.
-RULES_SAMPLE = {**COMMON, "num_samples": POSITIVE_INT}
+# Types, finiteness and plain ranges here, before the model loads; length, frames and steps are checked again by
+# sample/edit against the loaded model (its maximum length and diffusion steps), with messages that say so.
+RULES_SAMPLE = {
+    **COMMON, "num_samples": POSITIVE_INT, "length": Rule(float, above=0, optional=True),
+    "frames": Rule(int, low=1, optional=True), "steps": Rule(int, low=1, optional=True),
+    "overlap": Rule(float, low=0), "blend": Rule(float, low=0), "smooth_sigma": Rule(float, low=0, optional=True),
+}  # fmt: skip
+RULES_EDIT = {
+    **RULES_SAMPLE, "start": Rule(float, low=0), "prefix": Rule(float, low=0), "suffix": Rule(float, low=0),
+    "prefix_s": Rule(float, low=0, optional=True), "suffix_s": Rule(float, low=0, optional=True),
+    "hold_from": Rule(float, low=0, high=1), "reconstruction": Rule(float, low=0), "resample": POSITIVE_INT,
+    "boundary_blend": Rule(int, low=0),
+}  # fmt: skip
 RULES_EVALUATE = {
     **COMMON, "replications": POSITIVE_INT, "mm_replications": Rule(int, low=0), "guidance": Rule(float, low=0, optional=True),
     "steps": Rule(int, low=1, optional=True), "batch_size": POSITIVE_INT,

@@ -3,7 +3,6 @@ export or show them."""
 
 from __future__ import annotations
 
-import json
 import re
 import tempfile
 from dataclasses import dataclass, field, replace
@@ -11,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from motiondiff.atomic import save_npy, write_json
 from motiondiff.data.representations import Representation
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
@@ -64,13 +64,13 @@ class MotionOutput:
         rows = []
         for i, (joints, feats, prompt) in enumerate(zip(self.joints, self.features, self.prompts, strict=True)):
             stem = folder / _stem(prompt, i)
-            np.save(f"{stem}_joints.npy", joints.astype(np.float32))
-            np.save(f"{stem}_features.npy", feats.astype(np.float32))
+            save_npy(f"{stem}_joints.npy", joints.astype(np.float32))
+            save_npy(f"{stem}_features.npy", feats.astype(np.float32))
             exports = export_features(stem, self.representation, feats, self.fps, formats, title=prompt or "",
                                       joints=self._changed(i), rig_names=rig_names, body=body)  # fmt: skip
             rows.append({"prompt": prompt, "index": i, "frames": len(joints), "joints": f"{stem}_joints.npy",
                          "features": f"{stem}_features.npy", "exports": exports})  # fmt: skip
-        (folder / "results.json").write_text(json.dumps({"info": self.info, "samples": rows}, indent=1, default=str))
+        write_json(folder / "results.json", {"info": self.info, "samples": rows}, default=str)
         return rows
 
     def cleaned(self, *cleanups: str) -> MotionOutput:

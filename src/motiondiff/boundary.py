@@ -1,0 +1,126 @@
+"""The error boundary of every command: what a user sees when a run fails, and what it leaves on disk.
+
+An expected failure (a user error, unreadable or corrupt input, a full or read-only disk, text that is not UTF-8)
+is one ``error: ...`` line and exit code 2; Ctrl-C is one line and exit code 130. A bug still shows its traceback.
+A Hydra run folder belongs to its run: it is locked while the run writes to it (a second run aimed at the same
+folder is refused), and a failed run removes the folder it created, unless it holds checkpoints (training progress
+is never thrown away; the line says where they are).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import functools
+import os
+import shutil
+import sys
+from pathlib import Path
+
+from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError
+from motiondiff.errors import UsageError
+
+USER_ERRORS = (UsageError, DatasetNotFoundError, RepresentationError)  # raised with a message that names the fix
+LOCK_NAME = ".motiondiff.lock"
+KEPT_OUTPUTS = ("*.ckpt", "*.safetensors")  # what a failed run leaves in place
+
+
+def error_line(err: BaseException) -> str | None:
+    """The one line for an expected failure, None for anything else (a bug, shown with its traceback)."""
+    if isinstance(err, USER_ERRORS):
+        return str(err)
+    if isinstance(err, UnicodeDecodeError):
+        return f"cannot read the input as UTF-8 text ({err.reason} at byte {err.start}): save it as UTF-8"
+    if isinstance(err, MemoryError):
+        return "out of memory: ask for fewer or shorter motions (num_samples=, length=) or a smaller batch"
+    if isinstance(err, OSError):
+        name = f" {err.filename}" if err.filename else ""
+        hint = {errno.ENOSPC: "free some disk space", errno.EACCES: "choose a folder you can write to",
+                errno.EROFS: "choose a writable folder", errno.ENOENT: "check the path",
+                errno.ENOTDIR: "a part of the path is a file, not a folder", errno.EDQUOT: "free some disk space",
+                errno.EISDIR: "give a file, not a folder"}.get(err.errno, "check the path and its permissions")  # fmt: skip
+        return f"{err.strerror or err}:{name} ({hint})"
+    return None
+
+
+def guarded(fn):
+    """Run ``fn`` with expected failures as one ``error:`` line (exit 2) and Ctrl-C as exit 130."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except KeyboardInterrupt:
+            print("error: interrupted (Ctrl-C)", file=sys.stderr)
+            sys.exit(130)
+        except Exception as err:  # noqa: BLE001 - sorted into expected (one line) and bugs (re-raised)
+            line = error_line(err)
+            if line is None:
+                raise
+            print(f"error: {line}", file=sys.stderr)
+            sys.exit(2)
+
+    return wrapper
+
+
+def _fresh(out: Path, job_name: str) -> bool:
+    """Whether ``out`` holds only what Hydra writes at a run's start (its own folder, not a user's existing one)."""
+    return set(os.listdir(out)) <= {".hydra", f"{job_name}.log", LOCK_NAME}
+
+
+def _holder(lock: Path) -> int | None:
+    """The pid of a live process holding ``lock``, None when the lock is stale or unreadable."""
+    try:
+        pid = int(lock.read_text().strip() or 0)
+        os.kill(pid, 0)
+    except (OSError, ValueError):
+        return None
+    return pid if pid != os.getpid() else None
+
+
+def _worker_process() -> bool:
+    """Whether this process is one of a distributed run's other ranks (launched by Lightning's DDP or SLURM)."""
+    return any(os.environ.get(name, "0") not in ("", "0") for name in ("LOCAL_RANK", "RANK", "SLURM_PROCID"))
+
+
+@contextlib.contextmanager
+def run_folder(out: Path, job_name: str):
+    """Hold ``out`` for this run: refuse a folder another live run is writing to; on failure (any exception,
+    Ctrl-C, exit code != 0) remove the folder if this run created it and it holds no checkpoint."""
+    out = Path(out)
+    if _worker_process():  # the parent process of a multi-process run holds the folder for all of them
+        yield
+        return
+    fresh = _fresh(out, job_name)
+    lock = out / LOCK_NAME
+    while True:
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            break
+        except FileExistsError:
+            pid = _holder(lock)
+            if pid is not None:
+                raise UsageError(f"another run (pid {pid}) is writing to {out}: wait for it, or give this run its "
+                                 "own folder (leave hydra.run.dir unset)") from None  # fmt: skip
+            lock.unlink(missing_ok=True)  # stale: its run was killed
+    with os.fdopen(fd, "w") as f:
+        f.write(str(os.getpid()))
+    failed = True
+    try:
+        yield
+        failed = False
+    except SystemExit as exit_:
+        failed = exit_.code not in (0, None)
+        raise
+    finally:
+        lock.unlink(missing_ok=True)
+        if failed:
+            _remove_failed(out, fresh)
+
+
+def _remove_failed(out: Path, fresh: bool) -> None:
+    kept = [p for pattern in KEPT_OUTPUTS for p in out.rglob(pattern)]
+    if kept:
+        print(f"note: the failed run's checkpoints are kept in {out}", file=sys.stderr)
+    elif fresh:
+        shutil.rmtree(out, ignore_errors=True)
