@@ -10,6 +10,9 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
@@ -49,3 +52,30 @@ def assert_refused(proc: subprocess.CompletedProcess, *needles: str, code: int =
 
 def files_under(path: Path) -> list[str]:
     return sorted(str(p.relative_to(path)) for p in path.rglob("*") if p.is_file()) if path.exists() else []
+
+
+@dataclass(frozen=True)
+class Hostile:
+    """One case: ``motiondiff-<command> *args`` in a fresh folder, refused with a line holding every needle."""
+
+    name: str
+    command: str
+    args: tuple[str, ...]
+    needles: tuple[str, ...]
+    setup: Callable[[Path], tuple[str, ...]] | None = None  # extra arguments made from files in the case's folder
+    env: dict = field(default_factory=dict)
+
+
+def run_collected(request, tmp_path_factory, workers: int = 2) -> dict[str, tuple[subprocess.CompletedProcess, Path]]:
+    """Run every collected ``case`` of the requesting module, ``workers`` at a time (for a module-scoped fixture:
+    the subprocesses overlap, the tests then read their results). name -> (process, its folder)."""
+    wanted = [item.callspec.params["case"] for item in request.session.items
+              if item.module is request.module and hasattr(item, "callspec") and "case" in item.callspec.params]  # fmt: skip
+
+    def run(case: Hostile):
+        tmp = tmp_path_factory.mktemp(case.name)
+        extra = case.setup(tmp) if case.setup else ()
+        return case.name, (run_cli(tmp, case.command, *case.args, *extra, env=case.env), tmp)
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        return dict(pool.map(run, wanted))

@@ -5,26 +5,14 @@ results). Every case: exit code 2, one ``error:`` line naming the problem, no tr
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-from conftest import assert_refused, files_under, run_cli
+from conftest import Hostile, assert_refused, files_under, run_collected
 
 MODEL = "checkpoint=shipped"
 SMALL = ("num_samples=1", "export=none", "length=1")
 CLIP = "input=test:dataset-1_walk_active_001"
-
-
-@dataclass(frozen=True)
-class Hostile:
-    name: str
-    command: str
-    args: tuple[str, ...]
-    needles: tuple[str, ...]
-    setup: Callable[[Path], tuple[str, ...]] | None = None  # extra arguments made from files in the case's folder
-    env: dict = field(default_factory=dict)
 
 
 def _file(name: str, data: bytes) -> Callable[[Path], tuple[str, ...]]:
@@ -127,17 +115,7 @@ CASES = [
 
 @pytest.fixture(scope="module")
 def results(request, tmp_path_factory) -> dict:
-    """Every collected case of this module, run two at a time."""
-    wanted = [item.callspec.params["case"] for item in request.session.items
-              if item.module is request.module and hasattr(item, "callspec") and "case" in item.callspec.params]  # fmt: skip
-
-    def run(case: Hostile):
-        tmp = tmp_path_factory.mktemp(case.name)
-        extra = case.setup(tmp) if case.setup else ()
-        return case.name, (run_cli(tmp, case.command, *case.args, *extra, env=case.env), tmp)
-
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        return dict(pool.map(run, wanted))
+    return run_collected(request, tmp_path_factory)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
