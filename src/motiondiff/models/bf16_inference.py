@@ -33,12 +33,22 @@ def _cast(model: nn.Module) -> list[tuple[nn.Parameter, torch.Tensor]]:
     return saved
 
 
+def _distributed_training() -> bool:
+    """Whether a process group is up (DDP training): changing a parameter's dtype through ``.data`` resets its
+    gradient accumulator, and with it the hooks DDP registered there, so its next backward would not reduce."""
+    return torch.distributed.is_available() and torch.distributed.is_initialized()
+
+
 @contextlib.contextmanager
 def bf16_inference(model: nn.Module, device_type: str, enabled: bool = True):
     """bf16 autocast on ``device_type`` with ``model``'s matmul weights held in bf16 for the duration (nested and
     concurrent uses of one model share one cast; the last to leave restores float32). Disabled: full precision."""
     if not enabled:
         with torch.autocast(device_type, enabled=False):
+            yield
+        return
+    if _distributed_training():  # a dtype change of .data drops the gradient hooks DDP put on the weights
+        with torch.autocast(device_type, dtype=torch.bfloat16):
             yield
         return
     key = id(model)
