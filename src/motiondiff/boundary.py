@@ -4,7 +4,8 @@ An expected failure (a user error, unreadable or corrupt input, a full or read-o
 is one ``error: ...`` line and exit code 2; Ctrl-C is one line and exit code 130. A bug still shows its traceback.
 A Hydra run folder belongs to its run: it is locked while the run writes to it (a second run aimed at the same
 folder is refused), and a failed run removes the folder it created, unless it holds checkpoints (training progress
-is never thrown away; the line says where they are).
+is never thrown away; the line says where they are). A run killed outright (SIGKILL) cannot clean up: the next run
+of the same command does it (``remove_stale_runs``), so a folder either ends complete, with its results.json, or goes.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import errno
 import functools
 import os
 import shutil
+import socket
 import sys
 from pathlib import Path
 
@@ -68,14 +70,39 @@ def _fresh(out: Path, job_name: str) -> bool:
     return set(os.listdir(out)) <= {".hydra", f"{job_name}.log", LOCK_NAME}
 
 
+def _read_lock(lock: Path) -> tuple[int, bool]:
+    """(pid, whether the run created its folder) from a lock file; (0, False) when unreadable or written on
+    another machine (a shared filesystem: its pid says nothing here)."""
+    try:
+        pid, fresh, host = (lock.read_text().split() + ["0", ""])[:3]
+        return (int(pid), fresh == "1") if host == socket.gethostname() else (0, False)
+    except (OSError, ValueError):
+        return 0, False
+
+
 def _holder(lock: Path) -> int | None:
     """The pid of a live process holding ``lock``, None when the lock is stale or unreadable."""
+    pid, _ = _read_lock(lock)
     try:
-        pid = int(lock.read_text().strip() or 0)
-        os.kill(pid, 0)
-    except (OSError, ValueError):
+        os.kill(pid, 0) if pid > 0 else None
+    except PermissionError:
+        return pid  # alive, another user's
+    except OSError:
         return None
-    return pid if pid != os.getpid() else None
+    return pid if 0 < pid != os.getpid() else None
+
+
+def remove_stale_runs(parent: Path) -> None:
+    """Run folders under ``parent`` left by killed runs (SIGKILL, power loss: their lock names a dead process) are
+    cleaned as a failed run would have cleaned them: removed when the run created them and no checkpoint is in
+    them, else only unlocked. Their ``results.json`` was never written, so nothing complete is lost."""
+    if not parent.is_dir():
+        return
+    for lock in parent.glob(f"*/{LOCK_NAME}"):
+        pid, fresh = _read_lock(lock)
+        if pid > 0 and _holder(lock) is None:
+            lock.unlink(missing_ok=True)
+            _remove_failed(lock.parent, fresh, quiet=True)
 
 
 def _worker_process() -> bool:
@@ -92,6 +119,7 @@ def run_folder(out: Path, job_name: str):
         yield
         return
     fresh = _fresh(out, job_name)
+    remove_stale_runs(out.parent)
     lock = out / LOCK_NAME
     while True:
         try:
@@ -104,7 +132,7 @@ def run_folder(out: Path, job_name: str):
                                  "own folder (leave hydra.run.dir unset)") from None  # fmt: skip
             lock.unlink(missing_ok=True)  # stale: its run was killed
     with os.fdopen(fd, "w") as f:
-        f.write(str(os.getpid()))
+        f.write(f"{os.getpid()} {int(fresh)} {socket.gethostname()}")
     failed = True
     try:
         yield
@@ -118,9 +146,10 @@ def run_folder(out: Path, job_name: str):
             _remove_failed(out, fresh)
 
 
-def _remove_failed(out: Path, fresh: bool) -> None:
+def _remove_failed(out: Path, fresh: bool, quiet: bool = False) -> None:
     kept = [p for pattern in KEPT_OUTPUTS for p in out.rglob(pattern)]
     if kept:
-        print(f"note: the failed run's checkpoints are kept in {out}", file=sys.stderr)
+        if not quiet:
+            print(f"note: the failed run's checkpoints are kept in {out}", file=sys.stderr)
     elif fresh:
         shutil.rmtree(out, ignore_errors=True)

@@ -138,6 +138,22 @@ def slug(text: str | None) -> str:
     return re.sub(r"[^a-z0-9]+", "_", (text or "unconditioned").lower()).strip("_")[:48] or "prompt"
 
 
+def unique_stems(prompts: list[str | None]) -> list[str]:
+    """One file stem per prompt, distinct even where prompts slug alike (emoji-only text, the same first 48
+    characters): the second gets ``_2``, the third ``_3``, ... so no prompt's files overwrite another's."""
+    taken: set[str] = set()
+    stems = []
+    for prompt in prompts:
+        base = stem = slug(prompt)
+        n = 1
+        while stem in taken:
+            n += 1
+            stem = f"{base}_{n}"
+        taken.add(stem)
+        stems.append(stem)
+    return stems
+
+
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_SAMPLE)  # types and ranges before any work
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
@@ -172,16 +188,15 @@ def run(cfg: DictConfig) -> Path:
         print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
         return out
     results = []
-    for prompt in prompts:
+    for prompt, stem in zip(prompts, unique_stems(prompts), strict=True):
         print(f"sampling {cfg.num_samples} x {frames} frames for {prompt or 'unconditioned'!r}")
         n = int(cfg.num_samples)
         feats = generate_features(module, [prompt] * n, torch.full((n,), frames), batch_size=n, generator=generator,
                                   guidance=guidance, sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta),
                                   progress=True, precision=precision)  # fmt: skip
         feats = np.stack(feats)
-        results += save_samples(
-            out, prompt, feats, module, formats, sigma, cleanup=cleanup, rig_names=cfg.get("bvh_names"), body=body
-        )
+        results += save_samples(out, prompt, feats, module, formats, sigma, stem=stem, cleanup=cleanup,
+                                rig_names=cfg.get("bvh_names"), body=body)  # fmt: skip
     summary["samples"] = results
     write_json(out / "results.json", summary)
     print(f"\n{len(results)} sample(s) written to {out}")

@@ -31,6 +31,7 @@ from motiondiff.data.compositional.report import readme, seam_measures, split_re
 from motiondiff.data.formats.prepared import SPLITS, PreparedSplit, fill_derived, load_split, save_split
 from motiondiff.data.preparing.captions import GENERATED_NOTE, generate_captions, measure
 from motiondiff.data.preparing.processing import most_active_window
+from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import PrepareError, check_output
 from motiondiff.data.representations.hml_features import canonicalize_joints, mean_std
 
@@ -259,39 +260,39 @@ def build(src: str | Path, out: str | Path, counts: dict[str, int], seed: int = 
         report["splits"][split]["draws_refused"] = dict(refused.most_common())
     # the dataset config trains on the source's single clips and these sequences together: statistics of both
     mean, std = mean_std(np.concatenate([sources["train"].arrays["features"], arrays["train"]["features"]]))
-    out.mkdir(parents=True, exist_ok=True)
-    for split in SPLITS:
-        save_split(out / f"{split}.npz", arrays[split], compact=True)
-    report["npz_bytes"] = {s: (out / f"{s}.npz").stat().st_size for s in SPLITS}
-    for name, arr in (("Mean.npy", mean), ("Std.npy", std)):
-        atomic_write(out / name, lambda tmp, a=arr: np.save(tmp, a), suffix=".npy")
-    options = {"src": src.name, "seed": seed, "transition_s": transition_s, "transition_frames": transition,
-               "max_frames": max_frames, "max_seam_ratio": MAX_SEAM_RATIO,
-               "max_standing_foot_slide_m": MAX_STANDING_FOOT_SLIDE, "counts": counts}  # fmt: skip
-    command = "python -m motiondiff.data.compositional.dataset " + " ".join(
-        [f"src=data/{src.name}", f"out=data/{out.name}", f"seed={seed}", f"transition_s={transition_s}",
-         f"max_frames={max_frames}"] + [f"{s}={counts[s]}" for s in SPLITS])  # fmt: skip
-    src_meta = sources["train"].meta
-    report.update(options=options, command=command)
-    meta = {
-        "clips": {s: len(arrays[s]["ids"]) for s in SPLITS},
-        "frames": {s: int(arrays[s]["lengths"].sum()) for s in SPLITS},
-        "labels": src_meta["labels"],
-        "fps": fps,
-        "joint_map": src_meta.get("joint_map", "bandai->smpl22"),
-        "captions": f"{GENERATED_NOTE}; clips' generated captions joined with ', then' / ', and then'",
-        "license": src_meta.get("license", ""),
-        "compositional": {**options, "command": command, "segments": SEGMENT_ARRAYS.replace("\n", " "),
-                          "mean_std": f"train features of {src.name} and of this dataset together",
-                          "test": f">= {COMPLEX_MIN_ACTIONS} local actions, >= {COMPLEX_MIN_FRAMES} frames"},
-    }  # fmt: skip
-    if (src / "LICENSE").is_file():
-        text = (src / "LICENSE").read_text()
-        atomic_write(out / "LICENSE", lambda tmp: Path(tmp).write_text(text), suffix="")
-    atomic_write(out / "README.md", lambda tmp: Path(tmp).write_text(readme(out.name, report, meta)), suffix=".md")
-    # meta.json last: its presence marks a complete dataset (check_output)
-    for name, obj in (("report.json", report), ("meta.json", meta)):
-        atomic_write(out / name, lambda tmp, o=obj: Path(tmp).write_text(json.dumps(o, indent=1)), suffix=".json")
+    with staged_folder(out) as build:  # a killed run leaves the old dataset or the new one, never a mixture
+        for split in SPLITS:
+            save_split(build / f"{split}.npz", arrays[split], compact=True)
+        report["npz_bytes"] = {s: (build / f"{s}.npz").stat().st_size for s in SPLITS}
+        for name, arr in (("Mean.npy", mean), ("Std.npy", std)):
+            atomic_write(build / name, lambda tmp, a=arr: np.save(tmp, a), suffix=".npy")
+        options = {"src": src.name, "seed": seed, "transition_s": transition_s, "transition_frames": transition,
+                   "max_frames": max_frames, "max_seam_ratio": MAX_SEAM_RATIO,
+                   "max_standing_foot_slide_m": MAX_STANDING_FOOT_SLIDE, "counts": counts}  # fmt: skip
+        command = "python -m motiondiff.data.compositional.dataset " + " ".join(
+            [f"src=data/{src.name}", f"out=data/{out.name}", f"seed={seed}", f"transition_s={transition_s}",
+             f"max_frames={max_frames}"] + [f"{s}={counts[s]}" for s in SPLITS])  # fmt: skip
+        src_meta = sources["train"].meta
+        report.update(options=options, command=command)
+        meta = {
+            "clips": {s: len(arrays[s]["ids"]) for s in SPLITS},
+            "frames": {s: int(arrays[s]["lengths"].sum()) for s in SPLITS},
+            "labels": src_meta["labels"],
+            "fps": fps,
+            "joint_map": src_meta.get("joint_map", "bandai->smpl22"),
+            "captions": f"{GENERATED_NOTE}; clips' generated captions joined with ', then' / ', and then'",
+            "license": src_meta.get("license", ""),
+            "compositional": {**options, "command": command, "segments": SEGMENT_ARRAYS.replace("\n", " "),
+                              "mean_std": f"train features of {src.name} and of this dataset together",
+                              "test": f">= {COMPLEX_MIN_ACTIONS} local actions, >= {COMPLEX_MIN_FRAMES} frames"},
+        }  # fmt: skip
+        if (src / "LICENSE").is_file():
+            text = (src / "LICENSE").read_text()
+            atomic_write(build / "LICENSE", lambda tmp: Path(tmp).write_text(text), suffix="")
+        atomic_write(build / "README.md", lambda tmp: Path(tmp).write_text(readme(out.name, report, meta)), suffix=".md")
+        # meta.json last: its presence marks a complete dataset (check_output)
+        for name, obj in (("report.json", report), ("meta.json", meta)):
+            atomic_write(build / name, lambda tmp, o=obj: Path(tmp).write_text(json.dumps(o, indent=1)), suffix=".json")
     return report
 
 

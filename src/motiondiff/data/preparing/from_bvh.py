@@ -39,6 +39,7 @@ from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.bvh import BVHError, parse_bvh
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.preparing.captions import GENERATED_NOTE
+from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import PrepareError, check_output, copy_license, process_and_write
 
 COLUMNS = ("file", "action", "style", "caption")
@@ -227,23 +228,24 @@ def prepare_bvh(
     meta = {"captions": f"{note}{GENERATED_NOTE} (per-clip flags: captions_generated)", "joint_map_used": jm.to_json()}
     meta["license"] = copy_license(None, sources) or "unknown: no LICENSE file in the sources; check their terms"
     resolved = [Path(p).resolve() for p in sources]
-    report = process_and_write(clips, [], resolved, out, jm, options, meta, workers, progress)
-    copy_license(out, sources)
-    atomic_write(out / "joint_map.json", lambda tmp: Path(tmp).write_text(json.dumps(jm.to_json(), indent=1)))
-    _write_readme(out, sources, report, meta)
+    with staged_folder(out) as build:  # a killed run leaves the old dataset or the new one, never a mixture
+        report = process_and_write(clips, [], resolved, build, jm, options, meta, workers, progress)
+        copy_license(build, sources)
+        atomic_write(build / "joint_map.json", lambda tmp: Path(tmp).write_text(json.dumps(jm.to_json(), indent=1)))
+        _write_readme(build, sources, report, meta, out.name)
     return report
 
 
-def _write_readme(out: Path, sources, report: dict, meta: dict) -> None:
+def _write_readme(out: Path, sources, report: dict, meta: dict, name: str) -> None:
     o = report["options"]
     cmd = "python -m motiondiff.data.preparing.prepare bvh " + " ".join(f"--src {Path(p).name}" for p in sources)
     cmd += f" --labels {Path(o['labels']).name}" if o["labels"] else ""
     cmd += f" --joint-map {o['joint_map']}"
     cmd += "".join(f" --{k.replace('_', '-')} {o[k]}" for k in ("units_to_metres", "per_group", "max_frames")
                    if o[k] is not None)  # fmt: skip
-    cmd += " --compact" * bool(o["compact"]) + f" --seed {o['seed']} --out {out.name}"
+    cmd += " --compact" * bool(o["compact"]) + f" --seed {o['seed']} --out {name}"
     clips = report["clips"]
-    text = f"""# {out.name}
+    text = f"""# {name}
 
 Motion capture prepared by motiondiff from BVH files: {", ".join(Path(p).name for p in sources)}.
 

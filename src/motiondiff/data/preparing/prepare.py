@@ -20,6 +20,7 @@ from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.formats.prepared import SPLITS
 from motiondiff.data.preparing.captions import GENERATED_NOTE
+from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import (  # noqa: F401  (PrepareError, check_output, caption_seed, load_held_out: part of this module's API)
     PrepareError,
     _write_license_and_readme,
@@ -63,8 +64,9 @@ def prepare_bandai(
                "caption_variants": caption_variants, "rare_to_train": rare_to_train,
                "held_out": [str(p) for p in held_out]}  # fmt: skip
     meta = {"captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}
-    report = process_and_write(clips, skipped, sources, out, joint_map, options, meta, workers, progress)
-    _write_license_and_readme(out, sources, report)
+    with staged_folder(out) as build:  # a killed run leaves the old dataset or the new one, never a mixture
+        report = process_and_write(clips, skipped, sources, build, joint_map, options, meta, workers, progress)
+        _write_license_and_readme(build, sources, report, out.name)
     return report
 
 

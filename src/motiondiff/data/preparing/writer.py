@@ -1,8 +1,9 @@
 """Writing a prepared dataset (see motiondiff.data.formats.prepared for the format), shared by every source's preparation
 (motiondiff.data.preparing.prepare for Bandai Namco, prepare_bvh for BVH folders, compositional for joined clips).
 
-Clips are processed in worker processes, split, captioned and written to temporary names that are then renamed, so
-an interrupted run leaves either the previous dataset or the new one, never a mixture of half-written files.
+Clips are processed in worker processes, split, captioned and written into the folder being built, a temporary
+sibling of the output that replaces it in one swap (motiondiff.data.preparing.staging), so an interrupted run leaves
+either the previous dataset or the new one, never a mixture.
 """
 
 from __future__ import annotations
@@ -150,15 +151,16 @@ def copy_license(out: Path | None, sources) -> str | None:
     return None
 
 
-def _write_license_and_readme(out: Path, sources, report: dict) -> None:
+def _write_license_and_readme(out: Path, sources, report: dict, name: str) -> None:
+    """LICENSE and README.md into ``out`` (the folder being built) for the dataset called ``name``."""
     copy_license(out, sources)
     opts = report["options"]
     cmd = "python -m motiondiff.data.preparing.prepare bandai " + " ".join(f"--src {Path(p).name}" for p in sources)
-    cmd += f" --out {out.name}"
+    cmd += f" --out {name}"
     cmd += "".join(f" --{k.replace('_', '-')} {opts[k]}" for k in ("per_group", "max_frames") if opts[k] is not None)
     cmd += " --compact" * bool(opts["compact"]) + f" --seed {opts['seed']}"
     clips = report["clips"]
-    text = f"""# {out.name}
+    text = f"""# {name}
 
 Real motion capture prepared by motiondiff from the Bandai Namco Research Motion Dataset 1 and 2.
 

@@ -1,0 +1,106 @@
+"""Building a dataset folder beside the old one and swapping it in, so a killed `prepare` never leaves a mixture.
+
+`staged_folder(out)` yields a temporary sibling (``.<name>.building-<pid>``) to write the whole dataset into. On
+success the new folder takes the old one's place in one atomic exchange (Linux ``renameat2(RENAME_EXCHANGE)``;
+Python has no call for it, so it goes through ctypes), and the old one is deleted. Where the exchange is missing
+(another OS, a filesystem without it) the old folder is renamed aside (``.<name>.replaced-<pid>``) and the new one
+renamed in; a kill between the two renames is repaired on the next start, which puts the old complete folder back.
+On failure, Ctrl-C included, the temporary folder goes and the old dataset is untouched. Files in the old folder
+that the new build did not write (a user's notes, a cache) are hard-linked into the new one before the swap.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import errno
+import os
+import re
+import shutil
+from pathlib import Path
+
+_AT_FDCWD, _RENAME_EXCHANGE = -100, 2
+_TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<kind>building|replaced)-(?P<pid>\d+)$")
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def recover(out: Path) -> None:
+    """Repair what a killed run left beside ``out``: a swap cut between its renames is undone (the old complete
+    folder goes back), temporary build folders of dead runs are removed."""
+    if not out.parent.is_dir():
+        return
+    for path in sorted(out.parent.iterdir()):
+        m = _TEMP.match(path.name)
+        if m is None or m["name"] != out.name or _alive(int(m["pid"])):
+            continue
+        if m["kind"] == "replaced" and not out.exists():
+            os.rename(path, out)  # killed between the fallback's two renames: the old dataset is still complete
+        else:
+            shutil.rmtree(path, ignore_errors=True)
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two paths atomically; False where the system cannot (then nothing has moved)."""
+    renameat2 = getattr(ctypes.CDLL(None, use_errno=True), "renameat2", None)
+    if renameat2 is None:
+        return False
+    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP, errno.EOPNOTSUPP):
+        return False
+    raise OSError(err, os.strerror(err), str(b))
+
+
+def _keep_extra_files(old: Path, new: Path) -> None:
+    for entry in old.iterdir():
+        target = new / entry.name
+        if target.exists() or _TEMP.match(entry.name):
+            continue
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.copytree(entry, target, symlinks=True, copy_function=os.link)
+        else:
+            os.link(entry, target, follow_symlinks=False)
+
+
+def swap_in(build: Path, out: Path) -> None:
+    """Put the finished ``build`` folder at ``out``, replacing what was there."""
+    if not out.exists():
+        os.rename(build, out)
+        return
+    _keep_extra_files(out, build)
+    if _exchange(build, out):
+        shutil.rmtree(build, ignore_errors=True)  # now the old dataset
+        return
+    aside = out.parent / f".{out.name}.replaced-{os.getpid()}"
+    os.rename(out, aside)
+    os.rename(build, out)
+    shutil.rmtree(aside, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def staged_folder(out: str | Path):
+    """Yield an empty temporary sibling of ``out`` to build into; swap it in when the block completes."""
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    recover(out)
+    build = out.parent / f".{out.name}.building-{os.getpid()}"
+    shutil.rmtree(build, ignore_errors=True)
+    build.mkdir()
+    try:
+        yield build
+    except BaseException:
+        shutil.rmtree(build, ignore_errors=True)
+        raise
+    swap_in(build, out)

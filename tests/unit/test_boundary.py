@@ -1,0 +1,72 @@
+"""Run folders of the error boundary: locks, the cleanup of a failed run, and of runs killed outright."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+
+import pytest
+
+from motiondiff.boundary import LOCK_NAME, remove_stale_runs, run_folder
+from motiondiff.errors import UsageError
+
+
+def dead_pid() -> int:
+    proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    return int(proc.stdout)
+
+
+def killed_run(parent, name, fresh=True, host=None, files=("a_joints.npy",)):
+    folder = parent / name
+    (folder / ".hydra").mkdir(parents=True)
+    for f in files:
+        (folder / f).write_bytes(b"x")
+    (folder / LOCK_NAME).write_text(f"{dead_pid()} {int(fresh)} {host or socket.gethostname()}")
+    return folder
+
+
+def test_a_killed_runs_folder_goes_at_the_next_start_unless_it_holds_checkpoints_or_was_not_its_own(tmp_path):
+    partial = killed_run(tmp_path, "partial")
+    trained = killed_run(tmp_path, "trained", files=())
+    (trained / "last.ckpt").write_bytes(b"weights")
+    users = killed_run(tmp_path, "users", fresh=False)
+    elsewhere = killed_run(tmp_path, "elsewhere", host="another-machine")
+    complete = tmp_path / "complete"
+    complete.mkdir()
+    (complete / "results.json").write_text("{}")
+    remove_stale_runs(tmp_path)
+    assert not partial.exists()
+    assert (trained / "last.ckpt").is_file() and not (trained / LOCK_NAME).exists()
+    assert (users / "a_joints.npy").is_file() and not (users / LOCK_NAME).exists()
+    assert (elsewhere / LOCK_NAME).exists(), "a lock from another machine says nothing about its process here"
+    assert (complete / "results.json").is_file()
+
+
+def test_a_live_runs_folder_is_refused_and_kept(tmp_path):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / LOCK_NAME).write_text(f"{os.getppid()} 1 {socket.gethostname()}")
+    with pytest.raises(UsageError, match="another run"):
+        with run_folder(out, "sample"):
+            pass
+    remove_stale_runs(tmp_path)
+    assert (out / LOCK_NAME).exists()
+
+
+def test_a_failed_run_removes_its_fresh_folder_and_a_worker_rank_leaves_it_to_its_parent(tmp_path, monkeypatch):
+    out = tmp_path / "run"
+    out.mkdir()
+    with pytest.raises(RuntimeError):
+        with run_folder(out, "sample"):
+            (out / "half.npy").write_bytes(b"x")
+            raise RuntimeError("failed")
+    assert not out.exists()
+    out.mkdir()
+    monkeypatch.setenv("LOCAL_RANK", "1")
+    with pytest.raises(RuntimeError):
+        with run_folder(out, "sample"):
+            assert not (out / LOCK_NAME).exists()
+            raise RuntimeError("failed")
+    assert out.exists(), "rank 1 must not remove the folder rank 0 is writing"
