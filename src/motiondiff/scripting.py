@@ -29,9 +29,13 @@ def register_resolvers() -> None:
     if not OmegaConf.has_resolver("run_id"):
         OmegaConf.register_new_resolver("run_id", lambda: RUN_ID)
     if not OmegaConf.has_resolver("fast_cpu_precision"):
-        from motiondiff.hardware import fast_cpu_precision
+        OmegaConf.register_new_resolver("fast_cpu_precision", _fast_cpu_precision)
 
-        OmegaConf.register_new_resolver("fast_cpu_precision", fast_cpu_precision)
+
+def _fast_cpu_precision() -> str:
+    from motiondiff.hardware import fast_cpu_precision  # torch: imported when a config asks, not to start a command
+
+    return fast_cpu_precision()
 
 
 def quiet_tool_caches() -> None:

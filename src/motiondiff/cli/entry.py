@@ -5,17 +5,26 @@ line and exit code 2."""
 
 from __future__ import annotations
 
+from motiondiff.cli import validate
 from motiondiff.scripting import run_hydra as _run
+
+# The rule tables are checked before a command imports torch and Lightning (seconds), so a mistyped number is refused
+# at once; each command checks them again itself (for callers that skip these entry points).
 
 
 def train() -> None:
-    from motiondiff.cli.train import run
+    def run(cfg):
+        validate.check(cfg, validate.RULES_TRAIN)
+        from motiondiff.cli.train import run as train_run
+
+        return train_run(cfg)
 
     _run("train", run)
 
 
 def sample() -> None:
     def run(cfg):
+        validate.check(cfg, validate.RULES_SAMPLE)
         if cfg.get("method", "mdm") == "guidedmotion":
             from motiondiff.cli.sample_guided import run as guided
 
@@ -28,13 +37,21 @@ def sample() -> None:
 
 
 def edit() -> None:
-    from motiondiff.cli.edit import run
+    def run(cfg):
+        validate.check(cfg, validate.RULES_EDIT)
+        from motiondiff.cli.edit import run as edit_run
+
+        return edit_run(cfg)
 
     _run("edit", run)
 
 
 def evaluate() -> None:
-    from motiondiff.cli.evaluate import run
+    def run(cfg):
+        validate.check(cfg, validate.RULES_EVALUATE)
+        from motiondiff.cli.evaluate import run as evaluate_run
+
+        return evaluate_run(cfg)
 
     _run("evaluate", run)
 

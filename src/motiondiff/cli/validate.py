@@ -9,12 +9,12 @@ ranges in one place, and the entry points call `check(cfg, RULES_...)` first.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.cli.common import UsageError
-from motiondiff.data.representations import REPRESENTATIONS
+from motiondiff.errors import UsageError
 
 
 @dataclass(frozen=True)
@@ -24,12 +24,16 @@ class Rule:
     above: float | None = None  # exclusive lower bound
     high: float | None = None  # inclusive
     below: float | None = None  # exclusive upper bound
-    choices: tuple | None = None
+    choices: tuple | Callable[[], tuple] | None = None  # a callable is asked when checking (heavy imports)
     optional: bool = False  # null allowed
+
+    @property
+    def options(self) -> tuple | None:
+        return self.choices() if callable(self.choices) else self.choices
 
     def describe(self) -> str:
         if self.choices:
-            return "one of " + ", ".join(map(str, self.choices))
+            return "one of " + ", ".join(map(str, self.options))
         parts = ["an integer" if self.kind is int else "a number"]
         for sign, bound in ((">=", self.low), (">", self.above), ("<=", self.high), ("<", self.below)):
             if bound is not None:  # an integer bound prints whole (2**63-1, not 9.22337e+18)
@@ -40,7 +44,7 @@ class Rule:
         if value is None:
             return self.optional
         if self.choices:
-            return value in self.choices
+            return value in self.options
         if isinstance(value, bool) or not isinstance(value, int | float):
             return False
         if self.kind is int and not isinstance(value, int):
@@ -50,6 +54,12 @@ class Rule:
         return ((self.low is None or value >= self.low) and (self.above is None or value > self.above)
                 and (self.high is None or value <= self.high)
                 and (self.below is None or value < self.below))  # fmt: skip
+
+
+def _representations() -> tuple:
+    from motiondiff.data.representations import REPRESENTATIONS  # scipy and torch: not for the commands' first check
+
+    return tuple(REPRESENTATIONS)
 
 
 POSITIVE_INT = Rule(int, low=1)
@@ -64,7 +74,7 @@ RULES_TRAIN = {
     "trainer.max_steps": Rule(int, low=-1), "trainer.gradient_clip_val": Rule(float, low=0, optional=True),
     "diffusion.steps": POSITIVE_INT, "condition.drop_prob": Rule(float, low=0, high=1),
     "dataset.datamodule.max_frames": Rule(int, low=1, optional=True), "ema_decay": Rule(float, low=0, below=1),
-    "representation": Rule(str, choices=REPRESENTATIONS, optional=True),
+    "representation": Rule(str, choices=_representations, optional=True),
 }  # fmt: skip
 # Types, finiteness and plain ranges here, before the model loads; length, frames and steps are checked again by
 # sample/edit against the loaded model (its maximum length and diffusion steps), with messages that say so.
