@@ -92,6 +92,14 @@ def _holder(lock: Path) -> int | None:
     return pid if 0 < pid != os.getpid() else None
 
 
+def refuse_if_in_use(out: Path) -> None:
+    """Refuse ``out`` while another live run holds its lock (checked before Hydra writes its own files there too)."""
+    pid = _holder(Path(out) / LOCK_NAME)
+    if pid is not None:
+        raise UsageError(f"another run (pid {pid}) is writing to {out}: wait for it, or give this run its own folder "
+                         "(leave hydra.run.dir unset)")  # fmt: skip
+
+
 def remove_stale_runs(parent: Path) -> None:
     """Run folders under ``parent`` left by killed runs (SIGKILL, power loss: their lock names a dead process) are
     cleaned as a failed run would have cleaned them: removed when the run created them and no checkpoint is in
@@ -126,10 +134,7 @@ def run_folder(out: Path, job_name: str):
             fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
             break
         except FileExistsError:
-            pid = _holder(lock)
-            if pid is not None:
-                raise UsageError(f"another run (pid {pid}) is writing to {out}: wait for it, or give this run its "
-                                 "own folder (leave hydra.run.dir unset)") from None  # fmt: skip
+            refuse_if_in_use(out)
             lock.unlink(missing_ok=True)  # stale: its run was killed
     with os.fdopen(fd, "w") as f:
         f.write(f"{os.getpid()} {int(fresh)} {socket.gethostname()}")

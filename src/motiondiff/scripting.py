@@ -11,7 +11,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from motiondiff.boundary import USER_ERRORS, guarded, run_folder  # noqa: F401  (USER_ERRORS re-exported)
+from motiondiff.boundary import USER_ERRORS, guarded, refuse_if_in_use, run_folder  # noqa: F401  (USER_ERRORS re-exported)
 from motiondiff.errors import UsageError
 from motiondiff.paths import REPO_DIR, work_dir
 
@@ -149,6 +149,7 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
     except OmegaConfBaseException:
         return  # resolved by Hydra at run time only
     guarded(check_writable)(run_dir)
+    guarded(refuse_if_in_use)(run_dir)  # before Hydra writes its config and log into another run's folder
 
 
 def check_writable(folder: Path) -> None:

@@ -1,0 +1,60 @@
+"""Interrupted and overlapping runs through the installed commands: Ctrl-C during sampling is one line, exit 130 and
+no folder left; a second run aimed at a folder another live run is writing is refused and changes nothing there."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+
+from conftest import assert_refused, command, files_under, run_cli
+
+PROMPTS = "".join(f"a person walks forward then turns {k} times\n" for k in range(20))
+
+
+def start(tmp, name, *args):
+    env = {**os.environ, "MOTIONDIFF_OUTPUT_DIR": str(tmp / "outputs"), "HYDRA_FULL_ERROR": "0"}
+    return subprocess.Popen([*command(name), *args], cwd=tmp, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+
+
+def wait_for(predicate, timeout=120.0):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.1)
+    return False
+
+
+def test_ctrl_c_while_sampling_is_one_line_exit_130_and_leaves_no_folder(tmp_path):
+    (tmp_path / "prompts.txt").write_text(PROMPTS)
+    proc = start(tmp_path, "sample", "checkpoint=shipped", "prompts_file=prompts.txt", "length=1", "export=bvh")
+    try:
+        assert wait_for(lambda: any(p.suffix == ".bvh" for p in (tmp_path / "outputs").rglob("*"))), "no sample came"
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    completed = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+    assert_refused(completed, "interrupted", code=130)
+    assert files_under(tmp_path / "outputs") == [], "an interrupted run left its partial samples"
+
+
+def test_a_second_run_into_a_folder_in_use_is_refused_and_changes_nothing(tmp_path):
+    run_dir = tmp_path / "shared-run"
+    tiny = ("model.d_model=32", "model.num_layers=1", "model.num_heads=2", "model.ff_size=64", "logger=csv",
+            "condition=none", "trainer.max_steps=100000", "checkpoint_every=100000")  # fmt: skip
+    first = start(tmp_path, "train", *tiny, f"hydra.run.dir={run_dir}")
+    try:
+        assert wait_for(lambda: (run_dir / "csv").exists()), "the first training did not start"
+        before = files_under(run_dir)
+        second = run_cli(tmp_path, "sample", "checkpoint=shipped", "text=walk", "length=1", "export=none",
+                         f"hydra.run.dir={run_dir}")  # fmt: skip
+        assert_refused(second, "another run", str(run_dir))
+        assert not any(name.startswith("sample") or name.endswith(".npy") for name in files_under(run_dir))
+        assert set(before) <= set(files_under(run_dir))
+    finally:
+        first.kill()
+        first.wait()
