@@ -280,14 +280,11 @@ def _bvh_features(path: Path, motion, units, module, start: int, frames: int | N
     joint_map = _bvh_joint_map(module, motion, path, units)
     smpl = path.suffix.lower() != ".bvh"  # an SMPL parameter file: its rest pose is the Y-up template, no evidence
     up = bvh_up_axis(motion, joint_map, up_axis=up_axis, rest_pose=not smpl)
-    if up.axis != "+y":
-        motion = motion.rotated(up.matrix)  # a change of basis: offsets, End Sites and rotations turn with it
-    try:
-        clip = process_motion(motion, joint_map)
-        total = len(clip.joints)
-        window = frame_window(total, rep.frames_dropped, start, frames, int(module.hparams.max_frames), str(path))
-        if window != (0, total):
-            clip = process_motion(motion, joint_map, window=window)
+    turn = None if up.axis == "+y" else up.matrix  # a change of basis: offsets, End Sites and rotations turn with it
+    total = motion.resampled_frames(TARGET_FPS)
+    window = frame_window(total, rep.frames_dropped, start, frames, int(module.hparams.max_frames), str(path))
+    try:  # only the window is resampled and turned (a long capture's other frames never are)
+        clip = process_motion(motion, joint_map, window=window, turn=turn)
     except ClipError as err:
         raise EditError(f"{path}: {err}") from None
     if not _uses_rig(rep):

@@ -7,6 +7,7 @@ source name, the line number where one applies, what is wrong and how to fix it.
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,6 +16,10 @@ POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
 ROTATION_CHANNELS = ("Xrotation", "Yrotation", "Zrotation")
 VALID_CHANNELS = POSITION_CHANNELS + ROTATION_CHANNELS
 _CHANNEL_KINDS = {name.lower(): (name[1:], "XYZ".index(name[0])) for name in VALID_CHANNELS}
+# What a file may ask for (a few KB must not ask for GiBs): seconds per frame, frames, values.
+MIN_FRAME_TIME, MAX_FRAME_TIME = 1e-4, 10.0  # 10,000 fps .. one frame every 10 s
+MAX_FRAMES = 500_000  # over 4 hours at 30 fps
+MAX_VALUES = 30_000_000  # frames x channels (240 MB of float64)
 
 
 class BVHError(ValueError):
@@ -142,6 +147,13 @@ def _parse_joint(toks: _Tokens, raw: RawBVH, parent: int, line: int) -> None:
     name = " ".join(toks.rest_of_line(line))
     if not name:
         raise bvh_error(toks.source, line, "ROOT/JOINT without a name", "write e.g. 'JOINT LeftArm'")
+    if name in raw.names:
+        raise bvh_error(
+            toks.source,
+            line,
+            f"joint name {name!r} appears twice (joints are found by name, so one would stand for the other)",
+            "rename one of them in the file (e.g. with a suffix) and export it again",
+        )
     j = len(raw.names)
     raw.names.append(name)
     raw.parents.append(parent)
@@ -235,6 +247,15 @@ def _parse_motion(text: str, source: str, first_line: int, raw: RawBVH) -> None:
     if m is None:
         raise bvh_error(source, line, f"expected 'Frames: <count>' after MOTION, found {frames_line!r}", "fix it")
     frames = int(m.group(1))
+    width = sum(len(c) for c in raw.channels)
+    if frames > MAX_FRAMES or frames * width > MAX_VALUES:
+        raise bvh_error(
+            source,
+            line,
+            f"'Frames: {frames}' x {width} channels is more than this reader takes ({MAX_FRAMES} frames, "
+            f"{MAX_VALUES} values)",
+            "split the capture into shorter files",
+        )
     time_line, pos, line = _next_line(text, pos, line + 1)
     m = re.fullmatch(r"Frame\s*Time\s*:\s*(\S+)", time_line, re.I)
     try:
@@ -248,22 +269,34 @@ def _parse_motion(text: str, source: str, first_line: int, raw: RawBVH) -> None:
             f"expected 'Frame Time: <seconds>' with a positive number, found {time_line!r}",
             "write the seconds per frame, e.g. 'Frame Time: 0.0333333' for 30 fps",
         )
+    if not MIN_FRAME_TIME <= frame_time <= MAX_FRAME_TIME:
+        raise bvh_error(
+            source,
+            line,
+            f"'Frame Time: {frame_time:g}' seconds per frame is outside {MIN_FRAME_TIME:g}..{MAX_FRAME_TIME:g} s",
+            "write the seconds per frame (1 / fps, e.g. 0.0333333 for 30 fps), not the frame rate or a duration",
+        )
     raw.frame_time = frame_time
-    raw.values = _parse_values(text[pos:], source, line + 1, frames, sum(len(c) for c in raw.channels))
+    raw.values = _parse_values(text[pos:], source, line + 1, frames, width)
 
 
 def _parse_values(data: str, source: str, first_line: int, frames: int, width: int) -> np.ndarray:
-    tokens = data.split()
-    try:
-        values = np.array(tokens, dtype=np.float64)  # one C-level pass; the slow search below runs only on errors
-    except ValueError:
-        bad = next((i for i, t in enumerate(tokens) if not _is_float(t)), 0)
+    """The (frames, width) value table, parsed in C without a Python list of tokens; the slow search for a bad
+    token runs only on errors."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)  # numpy's "could not be read to its end" -> ValueError
+        try:  # (numpy reads a string of only whitespace as [-1.0])
+            values = np.fromstring(data, dtype=np.float64, sep=" ") if re.search(r"\S", data) else np.zeros(0)
+        except ValueError:
+            values = None
+    if values is None:
+        bad, token = next(((i, t) for i, t in _tokens(data) if not _is_float(t)), (0, data.split(None, 1)[0]))
         raise bvh_error(
             source,
             _token_line(data, bad, first_line),
-            f"non-numeric value {tokens[bad]!r} in the MOTION data",
+            f"non-numeric value {token[:40]!r} in the MOTION data",
             "every value after 'Frame Time' must be a number; fix or re-export the file",
-        ) from None
+        )
     if values.size != frames * width:
         raise bvh_error(source, None, *_count_problem(frames, width, values.size))
     finite = np.isfinite(values)
@@ -272,10 +305,15 @@ def _parse_values(data: str, source: str, first_line: int, frames: int, width: i
         raise bvh_error(
             source,
             _token_line(data, bad, first_line),
-            f"{tokens[bad]!r} (NaN or Inf) in the MOTION data",
+            f"{next(t for i, t in _tokens(data) if i == bad)[:40]!r} (NaN or Inf) in the MOTION data",
             "the exporter wrote an invalid number; re-export the clip or drop the frame",
         )
     return values.reshape(frames, width)
+
+
+def _tokens(data: str):
+    """(index, token) of the whitespace-separated tokens of `data`, one at a time (error path only)."""
+    return ((i, m.group()) for i, m in enumerate(re.finditer(r"\S+", data)))
 
 
 def _count_problem(frames: int, width: int, found: int) -> tuple[str, str]:
