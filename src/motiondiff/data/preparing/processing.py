@@ -45,6 +45,7 @@ class ProcessedClip:
     native_root: np.ndarray  # (N, 3) float32
     native: NativeSkeleton
     facts: MotionFacts
+    up_axis: str = "+y"  # the file's up axis, turned to +y
 
 
 def _collapse_placeholder_root(motion: BVHMotion) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
