@@ -20,7 +20,7 @@ from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import check_formats_for, export_features
 from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, check_text
-from motiondiff.lit.generation import feed_forward_shape, sampling_precision
+from motiondiff.lit.generation import check_num_samples, feed_forward_shape, sampling_precision
 from motiondiff.lit.loading import load_model as load_module
 from motiondiff.studies.editing import edit_numbers
 
@@ -81,6 +81,7 @@ def _check(cfg: DictConfig, module) -> int | None:
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_EDIT)  # types and ranges before any work
+    check_num_samples(cfg.num_samples)
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     formats, cleanup = export_formats(cfg), cleanup_option(cfg)
     check_for_edit(cleanup)
