@@ -1,0 +1,169 @@
+"""Bounds on what small inputs may ask for: BVH frame time, frame and value counts, duplicate joint names, the frames
+a clip resamples to (and resampling only a window), zip members that declare or inflate too much, symlinked source
+folders, and the up axis of the files `prepare bvh` reads."""
+
+from __future__ import annotations
+
+import os
+import struct
+import zipfile
+
+import numpy as np
+import pytest
+from test_bvh import ROOT6, ZXY, bvh_text, make_spec, smooth_values
+from test_prepare_bvh import write_bvh as write_walk
+
+from motiondiff.data.formats import archive
+from motiondiff.data.formats.archive import Source, SourceError
+from motiondiff.data.formats.bvh import BVHError, motion_from_arrays, parse_bvh, read_bvh, write_bvh
+from motiondiff.data.formats.bvh_parse import MAX_FRAMES, MAX_VALUES
+from motiondiff.data.formats.prepared import load_split
+from motiondiff.data.formats.up_axis import rotation_to_y_up
+from motiondiff.data.preparing.from_bvh import prepare_bvh
+from motiondiff.data.preparing.processing import MAX_RESAMPLED_FRAMES, ClipError, process_motion
+from motiondiff.data.preparing.writer import PrepareError
+
+NAMES, PARENTS = ["Hips", "Spine", "Head", "LeftLeg", "RightLeg"], [-1, 0, 1, 0, 0]
+
+
+def small_bvh(frames=10, frame_time=0.05, names=NAMES, parents=PARENTS) -> str:
+    spec = make_spec(names, parents, ROOT6, ZXY)
+    return bvh_text(spec, smooth_values(spec, frames), frame_time)
+
+
+def _with_line(text: str, prefix: str, line: str) -> str:
+    return "\n".join(line if row.startswith(prefix) else row for row in text.split("\n"))
+
+
+@pytest.mark.parametrize("value", ["1000000", "11", "0.00005"])
+def test_frame_time_outside_its_range_is_refused(value):
+    with pytest.raises(BVHError, match=r"clip\.bvh: line \d+: 'Frame Time: .*' seconds per frame is outside "
+                                       r"0\.0001\.\.10 s; write the seconds per frame"):  # fmt: skip
+        parse_bvh(_with_line(small_bvh(), "Frame Time", f"Frame Time: {value}"), source="clip.bvh")
+
+
+def test_frame_time_at_the_bounds_is_read():
+    for value in ("0.0001", "10"):
+        assert parse_bvh(_with_line(small_bvh(), "Frame Time", f"Frame Time: {value}")).frame_time == float(value)
+
+
+def test_frame_counts_beyond_the_bounds_are_refused_before_the_data_is_read():
+    many = _with_line(small_bvh(), "Frames", f"Frames: {MAX_FRAMES + 1}")
+    with pytest.raises(BVHError, match=rf"'Frames: {MAX_FRAMES + 1}' x 18 channels is more than .*shorter files"):
+        parse_bvh(many, source="clip.bvh")
+    chain = small_bvh(names=[f"J{i}" for i in range(21)], parents=list(range(-1, 20)))  # 66 channels
+    wide = MAX_VALUES // 66 + 1  # within MAX_FRAMES, beyond MAX_VALUES
+    with pytest.raises(BVHError, match=rf"'Frames: {wide}' x 66 channels .*{MAX_VALUES} values"):
+        parse_bvh(_with_line(chain, "Frames", f"Frames: {wide}"), source="clip.bvh")
+
+
+def test_declared_frames_must_match_the_data():
+    with pytest.raises(BVHError, match=r"more values than 'Frames: 9'"):
+        parse_bvh(_with_line(small_bvh(10), "Frames", "Frames: 9"))
+    with pytest.raises(BVHError, match=r"truncated"):
+        parse_bvh(_with_line(small_bvh(10), "Frames", "Frames: 11"))
+    blank = small_bvh(1)
+    blank = blank[: blank.index("Frame Time")] + "Frame Time: 0.05\n   \n"  # whitespace only (numpy reads -1)
+    with pytest.raises(BVHError, match=r"found 0"):
+        parse_bvh(blank)
+
+
+def test_a_bad_value_is_named_with_its_line():
+    text = small_bvh(5)
+    lines = text.split("\n")
+    row = lines.index("Frame Time:\t0.05") + 3
+    lines[row] = lines[row].replace(lines[row].split()[2], "abc", 1)
+    with pytest.raises(BVHError, match=rf"line {row + 1}: non-numeric value 'abc'"):
+        parse_bvh("\n".join(lines))
+
+
+def test_duplicate_joint_names_are_refused():
+    with pytest.raises(BVHError, match=r"clip\.bvh: line \d+: joint name 'Spine' appears twice.*rename one"):
+        parse_bvh(small_bvh(names=["Hips", "Spine", "Head", "Spine", "RightLeg"]), source="clip.bvh")
+
+
+def test_resampling_a_window_gives_the_frames_of_the_whole():
+    motion = parse_bvh(small_bvh(frames=200, frame_time=1 / 120))
+    whole = motion.resample(20.0)
+    assert motion.resampled_frames(20.0) == whole.num_frames == 34
+    part = motion.resample(20.0, (7, 19))
+    assert part.num_frames == 12
+    np.testing.assert_allclose(part.positions(), whole.positions()[7:19], atol=1e-9)
+    assert motion.resample(20.0, (30, 99)).num_frames == 4  # clipped to the motion
+
+
+def test_a_clip_resampled_beyond_the_bound_is_refused():
+    rot = np.tile([1.0, 0, 0, 0], (20002, 1, 1))
+    motion = motion_from_arrays(["Hips"], [-1], np.zeros((1, 3)), rot, np.zeros((20002, 3)), fps=0.1)
+    assert motion.resampled_frames(20.0) > MAX_RESAMPLED_FRAMES
+    with pytest.raises(ClipError, match=rf"more than {MAX_RESAMPLED_FRAMES}; split"):
+        process_motion(motion, None)
+
+
+# ---- zip members ------------------------------------------------------------------------------------------------
+def _zip(path, name: str, data: bytes, declared: int | None = None):
+    """A zip of one deflated member; `declared`: the uncompressed size its headers claim instead of the real one."""
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr(name, data)
+    if declared is not None:
+        raw = bytearray(path.read_bytes())
+        local, central = raw.index(b"PK\x03\x04"), raw.index(b"PK\x01\x02")
+        raw[local + 22 : local + 26] = struct.pack("<I", declared)
+        raw[central + 24 : central + 28] = struct.pack("<I", declared)
+        path.write_bytes(bytes(raw))
+    return path
+
+
+def test_a_member_declaring_too_much_is_refused(tmp_path, monkeypatch):
+    monkeypatch.setattr(archive, "MAX_MEMBER_BYTES", 1000)
+    src = Source(_zip(tmp_path / "big.zip", "a.bvh", b"0 " * 1000))
+    with pytest.raises(SourceError, match=r"big\.zip: member a\.bvh declares 0 MB uncompressed, more than"):
+        src.read_bytes("a.bvh")
+
+
+def test_a_member_inflating_beyond_its_declared_size_is_refused(tmp_path):
+    src = Source(_zip(tmp_path / "bomb.zip", "a.bvh", b"0 " * 100000, declared=100))
+    with pytest.raises(SourceError, match=r"member a\.bvh does not inflate to the 100 bytes it declares .*zip bomb"):
+        src.read_bytes("a.bvh")
+    assert Source(_zip(tmp_path / "ok.zip", "a.bvh", b"0 " * 10)).read_bytes("a.bvh") == b"0 " * 10
+
+
+# ---- folders with links -----------------------------------------------------------------------------------------
+def test_a_symlinked_folder_is_followed(tmp_path):
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "elsewhere" / "b.bvh").write_text("x")
+    (tmp_path / "src").mkdir()
+    (tmp_path / "src" / "a.bvh").write_text("x")
+    os.symlink(tmp_path / "elsewhere", tmp_path / "src" / "linked")
+    assert Source(tmp_path / "src").names() == ["a.bvh", "linked/b.bvh"]
+
+
+def test_a_link_loop_and_a_broken_link_are_refused(tmp_path):
+    (tmp_path / "src" / "sub").mkdir(parents=True)
+    (tmp_path / "src" / "sub" / "a.bvh").write_text("x")
+    os.symlink(tmp_path / "src", tmp_path / "src" / "sub" / "up")
+    with pytest.raises(SourceError, match=r"is a link to a folder already read \(a link loop"):
+        Source(tmp_path / "src")
+    os.unlink(tmp_path / "src" / "sub" / "up")
+    os.symlink(tmp_path / "nowhere", tmp_path / "src" / "gone.bvh")
+    with pytest.raises(SourceError, match=r"gone\.bvh is a broken link"):
+        Source(tmp_path / "src")
+
+
+# ---- up axis in prepare -----------------------------------------------------------------------------------------
+def test_prepare_turns_z_up_files_to_y_up(tmp_path):
+    (tmp_path / "z").mkdir()
+    for i in range(10):
+        write_walk(tmp_path / "y" / f"w{i}.bvh", seed=i)
+        motion = read_bvh(tmp_path / "y" / f"w{i}.bvh")
+        write_bvh(tmp_path / "z" / f"w{i}.bvh", motion.rotated(rotation_to_y_up("+z").T))
+    y = prepare_bvh([tmp_path / "y"], tmp_path / "out_y", workers=1, progress=False)
+    z = prepare_bvh([tmp_path / "z"], tmp_path / "out_z", workers=1, progress=False)
+    assert y["up_axes"] == {"+y": 10} and z["up_axes"] == {"+z": 10} and z["clips"] == y["clips"]
+    for split in ("train", "test"):
+        a, b = load_split(tmp_path / "out_y", split).arrays, load_split(tmp_path / "out_z", split).arrays
+        np.testing.assert_allclose(a["joints"], b["joints"], atol=1e-4)
+    forced = prepare_bvh([tmp_path / "z"], tmp_path / "out_f", workers=1, progress=False, up_axis="y")
+    assert forced["up_axes"] == {"+y": 10}  # forced: read as it says, the body lies down
+    with pytest.raises(PrepareError, match=r"--up-axis: .*'w'"):
+        prepare_bvh([tmp_path / "z"], tmp_path / "out_w", workers=1, progress=False, up_axis="w")
