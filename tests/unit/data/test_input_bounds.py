@@ -107,7 +107,7 @@ def _zip(path, name: str, data: bytes, declared: int | None = None):
         z.writestr(name, data)
     if declared is not None:
         raw = bytearray(path.read_bytes())
-        local, central = raw.index(b"PK\x03\x04"), raw.index(b"PK\x01\x02")
+        local, central = raw.index(b"PK\x03\x04"), raw.rindex(b"PK\x01\x02")
         raw[local + 22 : local + 26] = struct.pack("<I", declared)
         raw[central + 24 : central + 28] = struct.pack("<I", declared)
         path.write_bytes(bytes(raw))
@@ -167,3 +167,9 @@ def test_prepare_turns_z_up_files_to_y_up(tmp_path):
     assert forced["up_axes"] == {"+y": 10}  # forced: read as it says, the body lies down
     with pytest.raises(PrepareError, match=r"--up-axis: .*'w'"):
         prepare_bvh([tmp_path / "z"], tmp_path / "out_w", workers=1, progress=False, up_axis="w")
+
+
+@pytest.mark.parametrize("name", ["../evil.bvh", "/tmp/evil.bvh", "a/../../evil.bvh", "C:/evil.bvh"])
+def test_a_member_named_outside_the_archive_is_refused(tmp_path, name):
+    with pytest.raises(SourceError, match=r"points outside the archive"):
+        Source(_zip(tmp_path / "trav.zip", name, b"x"))

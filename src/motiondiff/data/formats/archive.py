@@ -2,7 +2,7 @@
 
 Bounds: a zip member may declare at most MAX_MEMBER_BYTES, and reading stops as soon as it inflates beyond what it
 declares (zip bombs lie about their size). Folders are walked following links to folders (a link loop or a broken
-link is refused, never skipped); nothing is ever extracted, so member names cannot reach outside.
+link is refused, never skipped); nothing is ever extracted, and a member named outside the archive ('../x') is refused.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ class Source:
             try:
                 self._zip = zipfile.ZipFile(self.path)
                 self._names = sorted(n for n in self._zip.namelist() if not n.endswith("/"))
+                _refuse_outside_names(self.path, self._names)
             except (zipfile.BadZipFile, OSError) as err:
                 raise SourceError(
                     f"{self.path}: cannot read it as a zip ({err}); re-download the archive or pass its unzipped folder"
@@ -117,3 +118,13 @@ def _walk(root: Path) -> list[str]:
 
 def _raise(err: OSError) -> None:
     raise SourceError(f"cannot read the folder {err.filename} ({err.strerror or err}); check its permissions")
+
+
+def _refuse_outside_names(path: Path, names: list[str]) -> None:
+    """SourceError for a member whose name points outside the archive ('../x', '/x', 'C:x'): nothing is extracted,
+    but such a name is a hostile or broken archive, and it would become a clip id."""
+    for name in names:
+        parts = PurePosixPath(name.replace("\\", "/")).parts
+        if name.startswith(("/", "\\")) or ".." in parts or (parts and ":" in parts[0]):
+            raise SourceError(f"{path}: member {name!r} points outside the archive (a hostile or broken zip); "
+                              "re-download it or remove that member")  # fmt: skip
