@@ -60,6 +60,7 @@ def load_input_motion(
     frames: int | None = None,
     up_axis: str = "auto",
     smpl_model: str | os.PathLike | None = None,
+    bvh=None,
 ) -> InputMotion:
     """The motion to edit, encoded in the model's representation.
 
@@ -78,7 +79,8 @@ def load_input_motion(
 
     ``start``/``frames``: the window to edit, from input frame ``start``, ``frames`` edited frames (default: as many
     as the model's maximum length allows). A file's window is cut before it is prepared, as `prepare` cuts long
-    clips, so it starts at the origin facing +Z like every training clip.
+    clips, so it starts at the origin facing +Z like every training clip. ``bvh``: the file already read
+    (`read_bvh_input`, before the model loads).
     """
     text = str(source)
     path = Path(text)
@@ -90,7 +92,7 @@ def load_input_motion(
         if path.is_dir() or not path.is_file():
             raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path")
         if path.suffix.lower() == ".bvh" or _holds_smpl_params(path):
-            motion, units = _read_motion(path, smpl_model)
+            motion, units = (bvh, None) if bvh is not None else _read_motion(path, smpl_model)
             features, window, total, up = _bvh_features(path, motion, units, module, start, frames, up_axis)
         else:
             features, window, total, up = _npy_features(path, module, start, frames, up_axis)
@@ -246,6 +248,15 @@ def _holds_smpl_params(path: Path) -> bool:
             return is_smpl_params(data.files)
     except (ValueError, OSError, EOFError) as err:
         raise EditError(f"{path}: not a readable .npz array ({err})") from None
+
+
+def read_bvh_input(source: str | os.PathLike):
+    """The BVHMotion of a ``.bvh`` input (EditError for a bad file), None for any other input: read before the model
+    loads, so a bad file is refused at once."""
+    path = Path(str(source))
+    if path.suffix.lower() != ".bvh" or not path.is_file():
+        return None
+    return _read_motion(path, None)[0]
 
 
 def _read_motion(path: Path, smpl_model) -> tuple[object, float | None]:
