@@ -36,9 +36,10 @@ def _rig() -> tuple[list[str], np.ndarray, np.ndarray]:
     return [str(n) for n in a["native_joint_names"]], parents, world * 100
 
 
-def bvh_text(frames: int = 4, frame_time: float = 1 / 120, up: str = "+y", all_channels: bool = False) -> str:
-    """A BVH of the standing pose gliding forward at 1 m/s (root channels only, unless `all_channels`: zero rotation
-    channels on every joint too), its axes turned so its head points along `up`."""
+def bvh_text(frames: int = 4, frame_time: float = 1 / 120, up: str = "+y", all_channels: bool = False,
+             fmt: str = "%.2f") -> str:  # fmt: skip
+    """A BVH of the standing pose swaying 1 m forward and back (root channels only, unless `all_channels`: zero rotation
+    channels on every joint too), its axes turned so its head points along `up`; values written with `fmt`."""
     names, parents, world = _rig()
     offsets = world - np.where(parents[:, None] >= 0, world[np.maximum(parents, 0)], 0.0)
     to_file = rotation_to_y_up(up)  # y_up = R @ file, so file rows = y_up rows @ R
@@ -48,11 +49,12 @@ def bvh_text(frames: int = 4, frame_time: float = 1 / 120, up: str = "+y", all_c
                              np.zeros((1, 3)), fps=1 / frame_time, channels=channels)  # fmt: skip
     head = format_bvh(one).split("MOTION")[0]
     t = np.arange(frames) * frame_time
-    root = np.stack([np.full(frames, world[0, 0]), np.full(frames, world[0, 1]), world[0, 2] + 100 * t], 1) @ to_file
+    sway = world[0, 2] + 100 * np.sin(t / 2)
+    root = np.stack([np.full(frames, world[0, 0]), np.full(frames, world[0, 1]), sway], 1) @ to_file
     table = np.zeros((frames, sum(len(c) for c in channels)))
     table[:, :3] = root
     buf = io.StringIO()
-    np.savetxt(buf, table, fmt="%.2f")
+    np.savetxt(buf, table, fmt=fmt)
     return f"{head}MOTION\nFrames: {frames}\nFrame Time: {frame_time:.8g}\n{buf.getvalue()}"
 
 

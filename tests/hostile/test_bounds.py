@@ -36,7 +36,7 @@ def edit_bvh(name: str, text_fn, *needles: str, args: tuple[str, ...] = ()) -> H
 
 
 def _frame_time(value: str):
-    return lambda: set_line(bvh_text(100), "Frame Time", f"Frame Time: {value}")
+    return lambda: set_line(bvh_text(165), "Frame Time", f"Frame Time: {value}")  # 7.6 KB
 
 
 def _frames(count: int, **kwargs):
@@ -155,15 +155,15 @@ def run_measured(tmp: Path, name: str, *args: str) -> tuple[subprocess.Completed
 
 
 def _long_bvh(tmp: Path) -> tuple[str, ...]:
-    """200,000 frames at 120 fps (28 minutes, 7 MB), Z-up: 80 frames are edited."""
-    return (f"input={write(tmp / 'long.bvh', bvh_text(200000, up='+z'))}", "text=a person walks")
+    """470,000 frames at 120 fps (65 minutes, 9.6 MB; frames x joints near the bound), Z-up: 80 frames are edited."""
+    return (f"input={write(tmp / 'long.bvh', bvh_text(470000, up='+z', fmt='%.4g'))}", "text=a person walks")
 
 
 MEASURED = {  # name: (case, refused)
     "edit_7kb_bvh_frame_time_1e6": (edit_bvh("m1", _frame_time("1000000"), "outside"), True),
     "prepare_800mb_zip_bomb": (prepare("m2", _bomb(None), "clip.bvh", "more than the 512 MB"), True),
     "prepare_800mb_zip_bomb_lying": (prepare("m3", _bomb(1000), "does not inflate to the 1000 bytes"), True),
-    "edit_200k_frame_z_up_bvh": (Hostile("m4", "edit", EDIT, (), _long_bvh), False),
+    "edit_470k_frame_z_up_bvh": (Hostile("m4", "edit", EDIT, (), _long_bvh), False),
 }
 
 
@@ -209,5 +209,6 @@ def test_largest_small_inputs_stay_within_4_gib(measured, name):
     assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     out = next((tmp / "outputs" / "edit").iterdir())
     result = json.loads((out / "results.json").read_text())["input"]
-    assert result["window"] == [0, 81] and result["total_frames"] == 33334  # the window was cut, not the whole file
+    assert result["window"] == [0, 81] and result["total_frames"] == 78334  # the window was cut, not the whole file
+    assert (tmp / "long.bvh").stat().st_size <= 10**7
     assert result["up_axis"]["axis"] == "+z" and result["up_axis"]["decided"]  # a Z-up file turned to Y-up

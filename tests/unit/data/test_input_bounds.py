@@ -16,7 +16,7 @@ from test_prepare_bvh import write_bvh as write_walk
 from motiondiff.data.formats import archive
 from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.bvh import BVHError, motion_from_arrays, parse_bvh, read_bvh, write_bvh
-from motiondiff.data.formats.bvh_parse import MAX_FRAMES, MAX_VALUES
+from motiondiff.data.formats.bvh_parse import MAX_FRAME_JOINTS, MAX_FRAMES, MAX_VALUES
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.formats.up_axis import rotation_to_y_up
 from motiondiff.data.preparing.from_bvh import prepare_bvh
@@ -49,12 +49,16 @@ def test_frame_time_at_the_bounds_is_read():
 
 def test_frame_counts_beyond_the_bounds_are_refused_before_the_data_is_read():
     many = _with_line(small_bvh(), "Frames", f"Frames: {MAX_FRAMES + 1}")
-    with pytest.raises(BVHError, match=rf"'Frames: {MAX_FRAMES + 1}' x 18 channels is more than .*shorter files"):
+    with pytest.raises(BVHError, match=rf"'Frames: {MAX_FRAMES + 1}' x 18 channels x 5 joints is more than .*shorter"):
         parse_bvh(many, source="clip.bvh")
     chain = small_bvh(names=[f"J{i}" for i in range(21)], parents=list(range(-1, 20)))  # 66 channels
     wide = MAX_VALUES // 66 + 1  # within MAX_FRAMES, beyond MAX_VALUES
     with pytest.raises(BVHError, match=rf"'Frames: {wide}' x 66 channels .*{MAX_VALUES} values"):
         parse_bvh(_with_line(chain, "Frames", f"Frames: {wide}"), source="clip.bvh")
+    spec = make_spec([f"J{i}" for i in range(21)], list(range(-1, 20)), ROOT6, ())  # 6 channels, 21 joints
+    deep = MAX_FRAME_JOINTS // 21 + 1  # within MAX_FRAMES and MAX_VALUES, beyond frames x joints
+    with pytest.raises(BVHError, match=rf"'Frames: {deep}' x 6 channels x 21 joints .*{MAX_FRAME_JOINTS} frames x j"):
+        parse_bvh(_with_line(bvh_text(spec, smooth_values(spec, 2), 0.05), "Frames", f"Frames: {deep}"))
 
 
 def test_declared_frames_must_match_the_data():
@@ -96,7 +100,7 @@ def test_a_clip_resampled_beyond_the_bound_is_refused():
     rot = np.tile([1.0, 0, 0, 0], (20002, 1, 1))
     motion = motion_from_arrays(["Hips"], [-1], np.zeros((1, 3)), rot, np.zeros((20002, 3)), fps=0.1)
     assert motion.resampled_frames(20.0) > MAX_RESAMPLED_FRAMES
-    with pytest.raises(ClipError, match=rf"more than {MAX_RESAMPLED_FRAMES}; split"):
+    with pytest.raises(ClipError, match=rf"more than {MAX_RESAMPLED_FRAMES} frames or"):
         process_motion(motion, None)
 
 

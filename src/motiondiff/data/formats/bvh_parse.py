@@ -20,6 +20,7 @@ _CHANNEL_KINDS = {name.lower(): (name[1:], "XYZ".index(name[0])) for name in VAL
 MIN_FRAME_TIME, MAX_FRAME_TIME = 1e-4, 10.0  # 10,000 fps .. one frame every 10 s
 MAX_FRAMES = 500_000  # over 4 hours at 30 fps
 MAX_VALUES = 30_000_000  # frames x channels (240 MB of float64)
+MAX_FRAME_JOINTS = 10_000_000  # frames x joints: each becomes a rotation and a translation (560 MB of float64)
 
 
 class BVHError(ValueError):
@@ -247,13 +248,13 @@ def _parse_motion(text: str, source: str, first_line: int, raw: RawBVH) -> None:
     if m is None:
         raise bvh_error(source, line, f"expected 'Frames: <count>' after MOTION, found {frames_line!r}", "fix it")
     frames = int(m.group(1))
-    width = sum(len(c) for c in raw.channels)
-    if frames > MAX_FRAMES or frames * width > MAX_VALUES:
+    width, joints = sum(len(c) for c in raw.channels), len(raw.names)
+    if frames > MAX_FRAMES or frames * width > MAX_VALUES or frames * joints > MAX_FRAME_JOINTS:
         raise bvh_error(
             source,
             line,
-            f"'Frames: {frames}' x {width} channels is more than this reader takes ({MAX_FRAMES} frames, "
-            f"{MAX_VALUES} values)",
+            f"'Frames: {frames}' x {width} channels x {joints} joints is more than this reader takes ({MAX_FRAMES} "
+            f"frames, {MAX_VALUES} values, {MAX_FRAME_JOINTS} frames x joints)",
             "split the capture into shorter files",
         )
     time_line, pos, line = _next_line(text, pos, line + 1)

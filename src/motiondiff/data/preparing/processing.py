@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motiondiff.data.formats.bvh import BVHMotion
+from motiondiff.data.formats.bvh_parse import MAX_FRAME_JOINTS
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.preparing.captions import MotionFacts, measure
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face
@@ -95,9 +96,11 @@ def process_motion(
     if motion.num_frames < 1:
         raise ClipError("the file has no frames")
     total = motion.resampled_frames(TARGET_FPS)
-    if total > MAX_RESAMPLED_FRAMES:
-        raise ClipError(f"{motion.num_frames} frames at {motion.fps:g} fps make {total} frames at {TARGET_FPS:g} fps, "
-                        f"more than {MAX_RESAMPLED_FRAMES}; split the capture into shorter files")  # fmt: skip
+    kept = total if window is None else max(min(window[1], total) - window[0], 0)
+    if total > MAX_RESAMPLED_FRAMES or kept * motion.num_joints > MAX_FRAME_JOINTS:
+        raise ClipError(f"{motion.num_frames} frames at {motion.fps:g} fps make {total} frames at {TARGET_FPS:g} fps "
+                        f"of {motion.num_joints} joints, more than {MAX_RESAMPLED_FRAMES} frames or "
+                        f"{MAX_FRAME_JOINTS} frames x joints; split the capture into shorter files")  # fmt: skip
     m = motion.resample(TARGET_FPS, window)
     m = (m if turn is None else m.rotated(turn)).scaled(joint_map.units_to_metres)
     if m.num_frames < MIN_FRAMES:
