@@ -16,7 +16,7 @@ from test_prepare_bvh import write_bvh as write_walk
 from motiondiff.data.formats import archive
 from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.bvh import BVHError, motion_from_arrays, parse_bvh, read_bvh, write_bvh
-from motiondiff.data.formats.bvh_parse import MAX_FRAME_JOINTS, MAX_FRAMES, MAX_VALUES
+from motiondiff.data.formats.bvh_parse import MAX_DEPTH, MAX_FRAME_JOINTS, MAX_FRAMES, MAX_JOINTS, MAX_VALUES
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.formats.up_axis import rotation_to_y_up
 from motiondiff.data.preparing.from_bvh import prepare_bvh
@@ -84,6 +84,22 @@ def test_a_bad_value_is_named_with_its_line():
 def test_duplicate_joint_names_are_refused():
     with pytest.raises(BVHError, match=r"clip\.bvh: line \d+: joint name 'Spine' appears twice.*rename one"):
         parse_bvh(small_bvh(names=["Hips", "Spine", "Head", "Spine", "RightLeg"]), source="clip.bvh")
+
+
+def _chain(count: int, nested: bool) -> str:
+    """A skeleton of `count` joints below the root, each inside the one before (nested) or all beside each other."""
+    if nested:
+        body = "".join(f"JOINT j{i}\n{{\nOFFSET 0 1 0\n" for i in range(count)) + "}\n" * count
+    else:
+        body = "".join(f"JOINT j{i}\n{{\nOFFSET 0 1 0\n}}\n" for i in range(count))
+    return f"HIERARCHY\nROOT a\n{{\nOFFSET 0 0 0\n{body}}}\nMOTION\nFrames: 1\nFrame Time: 0.1\n\n"
+
+
+def test_skeletons_too_large_or_too_deep_are_refused():
+    assert parse_bvh(_chain(150, nested=True)).num_joints == 151
+    for count, nested in ((MAX_DEPTH + 1, True), (MAX_JOINTS, False)):  # (Python's recursion would end the first)
+        with pytest.raises(BVHError, match=rf"more than {MAX_JOINTS} joints, or joints nested more than {MAX_DEPTH}"):
+            parse_bvh(_chain(count, nested))
 
 
 def test_resampling_a_window_gives_the_frames_of_the_whole():

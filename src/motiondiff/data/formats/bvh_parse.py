@@ -20,6 +20,7 @@ _CHANNEL_KINDS = {name.lower(): (name[1:], "XYZ".index(name[0])) for name in VAL
 MIN_FRAME_TIME, MAX_FRAME_TIME = 1e-4, 10.0  # 10,000 fps .. one frame every 10 s
 MAX_FRAMES = 500_000  # over 4 hours at 30 fps
 MAX_VALUES = 30_000_000  # frames x channels (240 MB of float64)
+MAX_JOINTS, MAX_DEPTH = 10_000, 200  # joints of a skeleton, and how deep they nest
 MAX_FRAME_JOINTS = 10_000_000  # frames x joints: each becomes a rotation and a translation (560 MB of float64)
 
 
@@ -48,6 +49,8 @@ class RawBVH:
     end_sites: dict[int, np.ndarray] = field(default_factory=dict)
     frame_time: float = 0.0
     values: np.ndarray | None = None
+    depth: list[int] = field(default_factory=list, repr=False)  # nesting depth of each joint (the root: 0)
+    seen: set[str] = field(default_factory=set, repr=False)  # the names so far
 
 
 class _Tokens:
@@ -148,7 +151,15 @@ def _parse_joint(toks: _Tokens, raw: RawBVH, parent: int, line: int) -> None:
     name = " ".join(toks.rest_of_line(line))
     if not name:
         raise bvh_error(toks.source, line, "ROOT/JOINT without a name", "write e.g. 'JOINT LeftArm'")
-    if name in raw.names:
+    depth = raw.depth[parent] + 1 if parent >= 0 else 0
+    if len(raw.names) >= MAX_JOINTS or depth > MAX_DEPTH:
+        raise bvh_error(
+            toks.source,
+            line,
+            f"more than {MAX_JOINTS} joints, or joints nested more than {MAX_DEPTH} deep",
+            "this is not a skeleton this reader takes; check the file or export the skeleton without extra joints",
+        )
+    if name in raw.seen:
         raise bvh_error(
             toks.source,
             line,
@@ -156,6 +167,8 @@ def _parse_joint(toks: _Tokens, raw: RawBVH, parent: int, line: int) -> None:
             "rename one of them in the file (e.g. with a suffix) and export it again",
         )
     j = len(raw.names)
+    raw.seen.add(name)
+    raw.depth.append(depth)
     raw.names.append(name)
     raw.parents.append(parent)
     raw.offsets.append(None)
