@@ -73,13 +73,26 @@ def zip_bomb(path: Path, inflated: int, declared: int | None = None, name: str =
     """A zip of one member of `inflated` bytes (a BVH header, then spaces), deflated to about 1/1000; `declared`: the
     size its headers claim instead (a lying member)."""
     with _LOCK:  # the cases run in threads: make it once
-        raw = bytearray(_bomb(inflated, name))
-    if declared is not None:
-        central = raw.rindex(b"PK\x01\x02")
-        raw[22:26] = struct.pack("<I", declared)  # the local header, at 0
-        raw[central + 24 : central + 28] = struct.pack("<I", declared)
-    path.write_bytes(bytes(raw))
+        raw = _bomb(inflated, name)
+    path.write_bytes(raw if declared is None else _declare(raw, declared))
     return path
+
+
+def npz_bomb(path: Path, declared: int = 2**31) -> Path:
+    """An .npz of a small joints array whose member claims to inflate to `declared` bytes."""
+    buf = io.BytesIO()
+    np.savez_compressed(buf, joints=np.zeros((100, 22, 3), np.float32))
+    path.write_bytes(_declare(buf.getvalue(), declared))
+    return path
+
+
+def _declare(raw: bytes, declared: int) -> bytes:
+    """A one-member zip whose headers claim `declared` uncompressed bytes."""
+    raw = bytearray(raw)
+    central = raw.rindex(b"PK\x01\x02")
+    raw[22:26] = struct.pack("<I", declared)  # the local header, at 0
+    raw[central + 24 : central + 28] = struct.pack("<I", declared)
+    return bytes(raw)
 
 
 @functools.cache

@@ -14,7 +14,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
-from bounds_files import bvh_text, set_line, write, zip_bomb, zip_of
+from bounds_files import bvh_text, npz_bomb, set_line, write, zip_bomb, zip_of
 from conftest import Hostile, assert_refused, command, files_under, run_collected
 
 from motiondiff.data.formats.bvh_parse import MAX_VALUES
@@ -106,6 +106,13 @@ CASES = [
     ),  # fmt: skip
     prepare("prepare_frames_declared_more", _folder(("clip.bvh", _frames(5))), "expected 5 frames", "truncated"),
     prepare("prepare_frames_declared_fewer", _folder(("clip.bvh", _frames(3))), "more values than 'Frames: 3'"),
+    Hostile(
+        "edit_npz_bomb",
+        "edit",
+        EDIT,
+        ("joints.npy takes 2048 MB", "more than the 256 MB"),
+        lambda tmp: (f"input={npz_bomb(tmp / 'bomb.npz')}",),
+    ),  # fmt: skip
     # num_samples beyond the bound: refused before the model loads
     Hostile("edit_num_samples_huge", "edit", (*EDIT[:1], CLIP, "num_samples=100000"), ("num_samples=100000", "1000")),
     Hostile(

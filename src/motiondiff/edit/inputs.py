@@ -91,6 +91,8 @@ def load_input_motion(
     if path.suffix.lower() in (".bvh", ".npy", ".npz"):
         if path.is_dir() or not path.is_file():
             raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path")
+        if path.suffix.lower() != ".bvh":
+            _check_array_sizes(path)
         if path.suffix.lower() == ".bvh" or _holds_smpl_params(path):
             motion, units = (bvh, None) if bvh is not None else _read_motion(path, smpl_model)
             features, window, total, up = _bvh_features(path, motion, units, module, start, frames, up_axis)
@@ -236,6 +238,16 @@ def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
         return joints
     turn, shift = ground_and_face(joints, skeleton)
     return qrot(np.broadcast_to(turn, joints.shape[:-1] + (4,)), joints + shift)
+
+
+def _check_array_sizes(path: Path) -> None:
+    """EditError for a .npy/.npz whose arrays would take more than MAX_ARRAY_BYTES (read from its headers)."""
+    from motiondiff.data.formats.array_bounds import check_array_file
+
+    try:
+        check_array_file(path)
+    except ValueError as err:
+        raise EditError(str(err)) from None
 
 
 def _holds_smpl_params(path: Path) -> bool:

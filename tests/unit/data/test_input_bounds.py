@@ -15,6 +15,7 @@ from test_prepare_bvh import write_bvh as write_walk
 
 from motiondiff.data.formats import archive
 from motiondiff.data.formats.archive import Source, SourceError
+from motiondiff.data.formats.array_bounds import check_array_file
 from motiondiff.data.formats.bvh import BVHError, motion_from_arrays, parse_bvh, read_bvh, write_bvh
 from motiondiff.data.formats.bvh_parse import MAX_DEPTH, MAX_FRAME_JOINTS, MAX_FRAMES, MAX_JOINTS, MAX_VALUES
 from motiondiff.data.formats.prepared import load_split
@@ -193,3 +194,18 @@ def test_prepare_turns_z_up_files_to_y_up(tmp_path):
 def test_a_member_named_outside_the_archive_is_refused(tmp_path, name):
     with pytest.raises(SourceError, match=r"points outside the archive"):
         Source(_zip(tmp_path / "trav.zip", name, b"x"))
+
+
+# ---- .npy / .npz motion files -----------------------------------------------------------------------------------
+def test_array_files_asking_for_too_much_are_refused_from_their_headers(tmp_path):
+    big = tmp_path / "big.npy"
+    with open(big, "wb") as f:  # a header declaring 10^9 frames, and no data
+        np.lib.format.write_array_header_1_0(f, {"descr": "<f4", "fortran_order": False, "shape": (10**9, 22, 3)})
+    with pytest.raises(ValueError, match=r"big\.npy: its array takes 251770 MB, more than the 256 MB"):
+        check_array_file(big)
+    np.save(tmp_path / "ok.npy", np.zeros((10, 22, 3), np.float32))
+    np.savez_compressed(tmp_path / "ok.npz", joints=np.zeros((1000, 22, 3), np.float32))
+    check_array_file(tmp_path / "ok.npy")
+    check_array_file(tmp_path / "ok.npz")
+    with pytest.raises(ValueError, match=r"ok\.npz: joints\.npy takes 0 MB, more than the 0 MB"):
+        check_array_file(tmp_path / "ok.npz", limit=1000)
