@@ -73,12 +73,13 @@ def test_declared_frames_must_match_the_data():
         parse_bvh(blank)
 
 
-def test_a_bad_value_is_named_with_its_line():
+@pytest.mark.parametrize("bad", ["abc", "1_000", "0x10"])
+def test_a_bad_value_is_named_with_its_line(bad):
     text = small_bvh(5)
     lines = text.split("\n")
     row = lines.index("Frame Time:\t0.05") + 3
-    lines[row] = lines[row].replace(lines[row].split()[2], "abc", 1)
-    with pytest.raises(BVHError, match=rf"line {row + 1}: non-numeric value 'abc'"):
+    lines[row] = lines[row].replace(lines[row].split()[2], bad, 1)
+    with pytest.raises(BVHError, match=rf"line {row + 1}: non-numeric value '{bad}'"):
         parse_bvh("\n".join(lines))
 
 

@@ -347,11 +347,12 @@ def _count_problem(frames: int, width: int, found: int) -> tuple[str, str]:
 
 
 def _is_float(token: str) -> bool:
+    """Whether numpy reads `token` as a number (Python's float also takes '1_000')."""
     try:
-        float(token)
+        np.float64(token)
     except ValueError:
         return False
-    return True
+    return "_" not in token
 
 
 def _token_line(data: str, index: int, first_line: int) -> int:
