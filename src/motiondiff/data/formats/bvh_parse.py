@@ -117,7 +117,7 @@ def parse_text(text: str, source: str) -> RawBVH:
             "the file is truncated or holds only a skeleton; re-export it with its motion",
         )
     first_line = text.count("\n", 0, motion.start()) + 1
-    _parse_motion(text[motion.start() :], source, first_line, raw)
+    _parse_motion(text, motion.start(), source, first_line, raw)  # (no copy of a large text)
     return raw
 
 
@@ -254,8 +254,8 @@ def _next_line(text: str, pos: int, line: int) -> tuple[str, int, int]:
     return "", pos, line
 
 
-def _parse_motion(text: str, source: str, first_line: int, raw: RawBVH) -> None:
-    _, pos, line = _next_line(text, 0, first_line)  # the MOTION line itself
+def _parse_motion(text: str, start: int, source: str, first_line: int, raw: RawBVH) -> None:
+    _, pos, line = _next_line(text, start, first_line)  # the MOTION line itself
     frames_line, pos, line = _next_line(text, pos, line + 1)
     m = re.fullmatch(r"Frames\s*:\s*(\d+)", frames_line, re.I)
     if m is None:
