@@ -11,7 +11,7 @@ import os
 import zipfile
 from pathlib import Path, PurePosixPath
 
-MAX_MEMBER_BYTES = 512 * 2**20  # uncompressed size of one zip member
+MAX_MEMBER_BYTES = 256 * 2**20  # uncompressed size of one zip member (prepare reads up to 4 at once)
 _CHUNK = 2**20
 
 
