@@ -15,12 +15,12 @@ from motiondiff.cli.sample import cleanup_option, export_formats, slug
 from motiondiff.cli.validate import RULES_EDIT, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.cleanups import apply_cleanups, check_for_edit
-from motiondiff.edit.inputs import InputMotion, load_input_motion, training_data_root
+from motiondiff.edit.inputs import InputMotion, load_input_motion, read_bvh_input, training_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import check_formats_for, export_features
 from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, check_text
-from motiondiff.lit.generation import feed_forward_shape, sampling_precision
+from motiondiff.lit.generation import check_num_samples, feed_forward_shape, sampling_precision
 from motiondiff.lit.loading import load_model as load_module
 from motiondiff.studies.editing import edit_numbers
 
@@ -81,10 +81,15 @@ def _check(cfg: DictConfig, module) -> int | None:
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_EDIT)  # types and ranges before any work
+    check_num_samples(cfg.num_samples)
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     formats, cleanup = export_formats(cfg), cleanup_option(cfg)
     check_for_edit(cleanup)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
+    try:
+        bvh = read_bvh_input(cfg.input) if cfg.input is not None else None  # a bad file is refused before the model
+    except EditError as err:
+        raise UsageError(str(err)) from None
     module = load_module(ckpt, cfg.device)
     check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"))
     steps = _check(cfg, module)
@@ -95,7 +100,8 @@ def run(cfg: DictConfig) -> Path:
         length = None if cfg.length is None else frames_from_seconds(float(cfg.length), fps)
         motion = load_input_motion(cfg.input, module, data_root=data_root, start=frames_from_seconds(cfg.start, fps),
                                    frames=length, up_axis=str(cfg.get("up_axis", "auto")),
-                                   smpl_model=cfg.get("smpl_model"))  # fmt: skip
+                                   smpl_model=cfg.get("smpl_model"), bvh=bvh)  # fmt: skip
+        del bvh  # the window is encoded: the whole file's arrays are not needed any more
         if motion.up is not None:
             print(f"up axis of {cfg.input}: {motion.up.describe()}"
                   + ("" if motion.up.axis == "+y" else ", turned to y up"))  # fmt: skip

@@ -40,7 +40,13 @@ from motiondiff.export.smpl_mesh import render_body
 from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.diffusion import MotionDiffusionModule
-from motiondiff.lit.generation import feed_forward_shape, generate_features, sampling_precision
+from motiondiff.lit.generation import (
+    MAX_LONG_SAMPLES,
+    check_num_samples,
+    feed_forward_shape,
+    generate_features,
+    sampling_precision,
+)
 from motiondiff.lit.loading import load_model
 from motiondiff.scripting import literal
 from motiondiff.studies.behaviour import mean_joint_speed
@@ -156,12 +162,15 @@ def unique_stems(prompts: list[str | None]) -> list[str]:
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_SAMPLE)  # types and ranges before any work
+    check_num_samples(cfg.num_samples)
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     if cfg.get("method", "mdm") not in ("mdm", "vvmdm"):  # sample.py runs method=guidedmotion with cli.sample_guided
         raise UsageError(f"unknown method={cfg.method!r}; choose mdm, vvmdm or guidedmotion")
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir, "action" if cfg.action is not None else "text")
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
+    if seconds is not None:  # a long motion's windows chain, sampled in one batch
+        check_num_samples(cfg.num_samples, MAX_LONG_SAMPLES)
     formats, cleanup, body = export_formats(cfg), cleanup_option(cfg), render_option(cfg)
     module = load_model(ckpt, cfg.device)
     check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"), body)
@@ -191,7 +200,7 @@ def run(cfg: DictConfig) -> Path:
     for prompt, stem in zip(prompts, unique_stems(prompts), strict=True):
         print(f"sampling {cfg.num_samples} x {frames} frames for {prompt or 'unconditioned'!r}")
         n = int(cfg.num_samples)
-        feats = generate_features(module, [prompt] * n, torch.full((n,), frames), batch_size=n, generator=generator,
+        feats = generate_features(module, [prompt] * n, torch.full((n,), frames), generator=generator,
                                   guidance=guidance, sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta),
                                   progress=True, precision=precision)  # fmt: skip
         feats = np.stack(feats)

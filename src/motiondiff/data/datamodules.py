@@ -418,10 +418,12 @@ class BVHDataModule(PreparedDataModule):
         representation: str | None = None,
         bucketing: bool = False,
         bucket_chunk: int = 64,
+        up_axis: str = "auto",
     ):
         super().__init__(cache, batch_size, num_workers, max_frames, min_frames, 1, seed, representation,
                          bucketing=bucketing, bucket_chunk=bucket_chunk)  # fmt: skip
         self.src, self.labels, self.joint_map_spec, self.max_clip_frames = src, labels, joint_map, max_clip_frames
+        self.up_axis = up_axis
 
     def prepared(self, split: str) -> PreparedSplit:
         if not self._prepared:
@@ -434,7 +436,7 @@ class BVHDataModule(PreparedDataModule):
                     layout="  <src>/**/*.bvh (a folder or a .zip), optional labels CSV: file,action,style,caption",
                 )  # fmt: skip
             ensure_prepared_bvh(self.src, self.root, labels=self.labels, joint_map=self.joint_map_spec,
-                                max_frames=self.max_clip_frames, seed=self.seed)  # fmt: skip
+                                max_frames=self.max_clip_frames, seed=self.seed, up_axis=self.up_axis)  # fmt: skip
         return super().prepared(split)
 
 

@@ -106,12 +106,21 @@ def _generator(module, generator: torch.Generator | None, seed: int | None) -> t
 
 @torch.inference_mode()
 def _inpaint_motions(module, motions, keeps, conds, num_samples, options, generator, progress) -> list[np.ndarray]:
-    """De-normalised features of num_samples edits per motion (padded to one batch), the input's features exact
-    where ``keeps[m]`` (N, D, bool)."""
+    """De-normalised features of num_samples edits per motion (SAMPLE_BATCH edits at a time, padded), the input's
+    features exact where ``keeps[m]`` (N, D, bool)."""
+    from motiondiff.lit.generation import SAMPLE_BATCH
+
+    order = [m for m in range(len(motions)) for _ in range(num_samples)]
+    out = []
+    for s in range(0, len(order), SAMPLE_BATCH):
+        out += _inpaint_batch(module, motions, keeps, conds, order[s : s + SAMPLE_BATCH], options, generator, progress)
+    return out
+
+
+def _inpaint_batch(module, motions, keeps, conds, order, options, generator, progress) -> list[np.ndarray]:
     from motiondiff.lit.conditions import condition_batch
 
     knowns = [m.features for m in motions]
-    order = [m for m in range(len(knowns)) for _ in range(num_samples)]
     lengths = torch.tensor([len(knowns[m]) for m in order])
     b, n, d = len(order), int(lengths.max()), module.representation.dim
     known = torch.zeros(b, n, d)

@@ -60,6 +60,7 @@ def load_input_motion(
     frames: int | None = None,
     up_axis: str = "auto",
     smpl_model: str | os.PathLike | None = None,
+    bvh=None,
 ) -> InputMotion:
     """The motion to edit, encoded in the model's representation.
 
@@ -78,7 +79,8 @@ def load_input_motion(
 
     ``start``/``frames``: the window to edit, from input frame ``start``, ``frames`` edited frames (default: as many
     as the model's maximum length allows). A file's window is cut before it is prepared, as `prepare` cuts long
-    clips, so it starts at the origin facing +Z like every training clip.
+    clips, so it starts at the origin facing +Z like every training clip. ``bvh``: the file already read
+    (`read_bvh_input`, before the model loads).
     """
     text = str(source)
     path = Path(text)
@@ -89,8 +91,10 @@ def load_input_motion(
     if path.suffix.lower() in (".bvh", ".npy", ".npz"):
         if path.is_dir() or not path.is_file():
             raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path")
+        if path.suffix.lower() != ".bvh":
+            _check_array_sizes(path)
         if path.suffix.lower() == ".bvh" or _holds_smpl_params(path):
-            motion, units = _read_motion(path, smpl_model)
+            motion, units = (bvh, None) if bvh is not None else _read_motion(path, smpl_model)
             features, window, total, up = _bvh_features(path, motion, units, module, start, frames, up_axis)
         else:
             features, window, total, up = _npy_features(path, module, start, frames, up_axis)
@@ -236,6 +240,16 @@ def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     return qrot(np.broadcast_to(turn, joints.shape[:-1] + (4,)), joints + shift)
 
 
+def _check_array_sizes(path: Path) -> None:
+    """EditError for a .npy/.npz whose arrays would take more than MAX_ARRAY_BYTES (read from its headers)."""
+    from motiondiff.data.formats.array_bounds import check_array_file
+
+    try:
+        check_array_file(path)
+    except ValueError as err:
+        raise EditError(str(err)) from None
+
+
 def _holds_smpl_params(path: Path) -> bool:
     from motiondiff.data.formats.smpl_params import is_smpl_params
 
@@ -246,6 +260,15 @@ def _holds_smpl_params(path: Path) -> bool:
             return is_smpl_params(data.files)
     except (ValueError, OSError, EOFError) as err:
         raise EditError(f"{path}: not a readable .npz array ({err})") from None
+
+
+def read_bvh_input(source: str | os.PathLike):
+    """The BVHMotion of a ``.bvh`` input (EditError for a bad file), None for any other input: read before the model
+    loads, so a bad file is refused at once."""
+    path = Path(str(source))
+    if path.suffix.lower() != ".bvh" or not path.is_file():
+        return None
+    return _read_motion(path, None)[0]
 
 
 def _read_motion(path: Path, smpl_model) -> tuple[object, float | None]:
@@ -280,14 +303,11 @@ def _bvh_features(path: Path, motion, units, module, start: int, frames: int | N
     joint_map = _bvh_joint_map(module, motion, path, units)
     smpl = path.suffix.lower() != ".bvh"  # an SMPL parameter file: its rest pose is the Y-up template, no evidence
     up = bvh_up_axis(motion, joint_map, up_axis=up_axis, rest_pose=not smpl)
-    if up.axis != "+y":
-        motion = motion.rotated(up.matrix)  # a change of basis: offsets, End Sites and rotations turn with it
-    try:
-        clip = process_motion(motion, joint_map)
-        total = len(clip.joints)
-        window = frame_window(total, rep.frames_dropped, start, frames, int(module.hparams.max_frames), str(path))
-        if window != (0, total):
-            clip = process_motion(motion, joint_map, window=window)
+    turn = None if up.axis == "+y" else up.matrix  # a change of basis: offsets, End Sites and rotations turn with it
+    total = motion.resampled_frames(TARGET_FPS)
+    window = frame_window(total, rep.frames_dropped, start, frames, int(module.hparams.max_frames), str(path))
+    try:  # only the window is resampled and turned (a long capture's other frames never are)
+        clip = process_motion(motion, joint_map, window=window, turn=turn)
     except ClipError as err:
         raise EditError(f"{path}: {err}") from None
     if not _uses_rig(rep):

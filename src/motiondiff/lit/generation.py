@@ -14,6 +14,18 @@ from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import condition_batch
 from motiondiff.models.bf16_inference import bf16_inference
 
+MAX_NUM_SAMPLES = 1000  # motions per prompt (or per edited motion) in one run
+SAMPLE_BATCH = 64  # motions sampled at once: noise and activations for this many, whatever num_samples asks
+MAX_LONG_SAMPLES = SAMPLE_BATCH  # long motions (timed prompts) are sampled in one batch
+
+
+def check_num_samples(value, limit: int = MAX_NUM_SAMPLES) -> int:
+    """``num_samples`` as a whole number 1..limit, else UsageError naming the bound and the fix."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= limit:
+        raise UsageError(f"num_samples={value!r}: must be a whole number from 1 to {limit} (motions are sampled "
+                         f"{SAMPLE_BATCH} at a time); for more, run again with another seed=")  # fmt: skip
+    return value
+
 
 def fitted_steps(module, steps, default: int | None) -> int | None:
     """The sampling steps to run: ``steps`` as given (a whole number that fits the model's T diffusion steps), else
@@ -46,7 +58,7 @@ def generate_features(
     module,
     conditions: list,
     lengths: torch.Tensor,
-    batch_size: int = 64,
+    batch_size: int = SAMPLE_BATCH,
     generator: torch.Generator | None = None,
     bar=None,
     precision: str = "32-true",
@@ -55,8 +67,10 @@ def generate_features(
     """De-normalised features (N_i, D), one per condition (prompt, action name/id or None), at the given lengths.
 
     `sampling`: guidance, sampler, steps, eta, ... (see MotionDiffusionModule.sample). Conditions are sorted by
-    length so each batch pads little; `bar` (a tqdm bar or None) is advanced per motion; `precision`
-    "bf16-mixed" runs the denoiser under bf16 autocast (as such models train), anything else in full precision."""
+    length so each batch pads little; `bar` (a tqdm bar or None) is advanced per motion; `precision` "bf16-mixed" runs
+    the denoiser under bf16 autocast (as such models train), anything else in full precision. On the CPU, with a
+    deterministic sampler (DDIM with eta=0, DPM-Solver++) and equal lengths, batches of SAMPLE_BATCH give the motions
+    of one batch up to float rounding (torch draws CPU noise 16 values at a time, in one stream)."""
     lengths = torch.as_tensor(lengths)
     if len(conditions) != len(lengths):
         raise ValueError(f"{len(conditions)} conditions for {len(lengths)} lengths")

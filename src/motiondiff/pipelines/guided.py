@@ -25,6 +25,7 @@ from motiondiff.guided.local_actions import (
     local_descriptions,
 )
 from motiondiff.lit.conditions import text_encoder_kwargs
+from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
 from motiondiff.lit.latent import LATENT_SAMPLERS, HierarchicalLatentModule
 from motiondiff.lit.loading import load_model
 from motiondiff.models.hierarchical import LEVELS
@@ -90,8 +91,7 @@ class GuidedMotionPipeline:
         max_frames = int(self.latent.decoder.hparams.max_frames)
         if not 1 <= frames <= max_frames:
             raise UsageError(f"seconds must give 1..{max_frames} frames at {self.fps:g} fps, got {seconds!r}")
-        if isinstance(num_samples, bool) or not isinstance(num_samples, int) or num_samples < 1:
-            raise UsageError(f"num_samples must be a whole number >= 1, got {num_samples!r}")
+        check_num_samples(num_samples, SAMPLE_BATCH)  # the latent levels are sampled in one batch
         steps = level_steps_of(self.latent, level_steps)
         sampler = (self.latent.hparams.sampling or {}).get("sampler", "ddim") if sampler == "auto" else sampler
         if sampler not in LATENT_SAMPLERS:

@@ -28,7 +28,14 @@ from motiondiff.errors import UsageError
 from motiondiff.hardware import inference_precision
 from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
 from motiondiff.lit.diffusion import SAMPLER_STEPS
-from motiondiff.lit.generation import feed_forward_shape, fitted_steps, generate_features, sampling_precision
+from motiondiff.lit.generation import (
+    MAX_LONG_SAMPLES,
+    check_num_samples,
+    feed_forward_shape,
+    fitted_steps,
+    generate_features,
+    sampling_precision,
+)
 from motiondiff.lit.loading import load_model
 from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
 from motiondiff.pipelines.output import MotionOutput
@@ -141,7 +148,7 @@ class MotionPipeline:
             text, _, timed = str(item).rpartition(":") if _is_timed(item) else (item, "", "")
             texts.append(check_text(text))
             secs.append(float(timed) if timed else float(s))
-        n = self._count(num_samples)
+        n = check_num_samples(num_samples, MAX_LONG_SAMPLES)  # a long motion's windows chain: one batch
         generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
         segments = [(repeated(self.model, t, n), s) for t, s in zip(texts, secs, strict=True)]
         try:
@@ -246,9 +253,7 @@ class MotionPipeline:
 
     @staticmethod
     def _count(num_samples) -> int:
-        if isinstance(num_samples, bool) or not isinstance(num_samples, int) or num_samples < 1:
-            raise UsageError(f"num_samples must be a whole number >= 1, got {num_samples!r}")
-        return num_samples
+        return check_num_samples(num_samples)  # 1..MAX_NUM_SAMPLES
 
     def _sampling(self, guidance, sampler, steps, eta) -> dict:
         guidance = self.model.default_guidance if guidance is None else guidance

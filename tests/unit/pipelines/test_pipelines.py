@@ -88,6 +88,7 @@ def test_action_model_takes_action_names():
         ({"prompt": "walk", "seconds": 60}, "longer than this model's maximum"),
         ({"prompt": "walk", "seconds": float("nan")}, "seconds must be a number"),
         ({"prompt": "walk", "num_samples": 0}, "num_samples"),
+        ({"prompt": "walk", "num_samples": 100000}, "num_samples=100000: must be a whole number from 1 to 1000"),
         ({"prompt": "walk", "guidance": -1}, "guidance"),
         ({"prompt": "walk", "steps": 5000}, "steps must be"),
         ({"prompt": "walk", "sampler": "euler"}, "sampler"),
@@ -98,6 +99,11 @@ def test_bad_input_is_one_clear_error(pipe, kwargs, message):
     prompt = kwargs.pop("prompt")
     with pytest.raises(UsageError, match=message):
         pipe(prompt, **kwargs)
+
+
+def test_long_motion_samples_at_most_one_batch(pipe):
+    with pytest.raises(UsageError, match="num_samples=65: must be a whole number from 1 to 64"):
+        pipe.long(["a person walks:2", "a person waves:2"], num_samples=65)
 
 
 def test_unknown_model_and_edit_inputs_name_the_fix(pipe, tmp_path):

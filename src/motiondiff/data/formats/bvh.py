@@ -141,17 +141,23 @@ class BVHMotion:
         frames = slice(start, stop)
         return replace(self, rotations=self.rotations[frames].copy(), translations=self.translations[frames].copy())
 
-    def resample(self, fps: float) -> BVHMotion:
-        """Motion at `fps`: frames at times k / fps (k = 0, 1, ...) up to the last source frame, source
-        frame i being at i / self.fps; rotations are slerped, translations interpolated linearly."""
+    def resampled_frames(self, fps: float) -> int:
+        """How many frames `resample(fps)` makes (computed, nothing resampled)."""
         if not fps > 0:
             raise ValueError(f"resample: fps must be positive, got {fps}")
-        count = self.num_frames
+        return int(np.floor((self.num_frames - 1) * fps / self.fps + 1e-9)) + 1 if self.num_frames else 0
+
+    def resample(self, fps: float, window: tuple[int, int] | None = None) -> BVHMotion:
+        """Motion at `fps`: frames at times k / fps (k = 0, 1, ...) up to the last source frame, source
+        frame i being at i / self.fps; rotations are slerped, translations interpolated linearly. `window`
+        (start, stop): only those output frames (the same motion as resampling all and slicing, without the
+        memory of the whole clip; quaternion signs may differ)."""
+        count, n_out = self.num_frames, self.resampled_frames(fps)
         if count == 0:
             return replace(self, frame_time=1.0 / fps)
-        n_out = int(np.floor((count - 1) * fps / self.fps + 1e-9)) + 1
+        start, stop = (0, n_out) if window is None else (max(int(window[0]), 0), min(int(window[1]), n_out))
         # Source frame index of each output frame, on the snapped fps grid (exact for 30->20, 120->20, ...).
-        u = np.arange(n_out) * self.fps / fps
+        u = np.arange(start, max(stop, start)) * self.fps / fps
         near = np.round(u)
         u = np.where(np.abs(u - near) < 1e-9, near, u)  # land exactly on coinciding source frames
         i0 = np.minimum(np.floor(u).astype(np.int64), max(count - 2, 0))

@@ -7,6 +7,7 @@ source name, the line number where one applies, what is wrong and how to fix it.
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,6 +16,12 @@ POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
 ROTATION_CHANNELS = ("Xrotation", "Yrotation", "Zrotation")
 VALID_CHANNELS = POSITION_CHANNELS + ROTATION_CHANNELS
 _CHANNEL_KINDS = {name.lower(): (name[1:], "XYZ".index(name[0])) for name in VALID_CHANNELS}
+# What a file may ask for (a few KB must not ask for GiBs): seconds per frame, frames, values.
+MIN_FRAME_TIME, MAX_FRAME_TIME = 1e-4, 10.0  # 10,000 fps .. one frame every 10 s
+MAX_FRAMES = 500_000  # over 4 hours at 30 fps
+MAX_VALUES = 30_000_000  # frames x channels (240 MB of float64)
+MAX_JOINTS, MAX_DEPTH = 10_000, 200  # joints of a skeleton, and how deep they nest
+MAX_FRAME_JOINTS = 10_000_000  # frames x joints: each becomes a rotation and a translation (560 MB of float64)
 
 
 class BVHError(ValueError):
@@ -42,6 +49,8 @@ class RawBVH:
     end_sites: dict[int, np.ndarray] = field(default_factory=dict)
     frame_time: float = 0.0
     values: np.ndarray | None = None
+    depth: list[int] = field(default_factory=list, repr=False)  # nesting depth of each joint (the root: 0)
+    seen: set[str] = field(default_factory=set, repr=False)  # the names so far
 
 
 class _Tokens:
@@ -108,7 +117,7 @@ def parse_text(text: str, source: str) -> RawBVH:
             "the file is truncated or holds only a skeleton; re-export it with its motion",
         )
     first_line = text.count("\n", 0, motion.start()) + 1
-    _parse_motion(text[motion.start() :], source, first_line, raw)
+    _parse_motion(text, motion.start(), source, first_line, raw)  # (no copy of a large text)
     return raw
 
 
@@ -142,7 +151,24 @@ def _parse_joint(toks: _Tokens, raw: RawBVH, parent: int, line: int) -> None:
     name = " ".join(toks.rest_of_line(line))
     if not name:
         raise bvh_error(toks.source, line, "ROOT/JOINT without a name", "write e.g. 'JOINT LeftArm'")
+    depth = raw.depth[parent] + 1 if parent >= 0 else 0
+    if len(raw.names) >= MAX_JOINTS or depth > MAX_DEPTH:
+        raise bvh_error(
+            toks.source,
+            line,
+            f"more than {MAX_JOINTS} joints, or joints nested more than {MAX_DEPTH} deep",
+            "this is not a skeleton this reader takes; check the file or export the skeleton without extra joints",
+        )
+    if name in raw.seen:
+        raise bvh_error(
+            toks.source,
+            line,
+            f"joint name {name!r} appears twice (joints are found by name, so one would stand for the other)",
+            "rename one of them in the file (e.g. with a suffix) and export it again",
+        )
     j = len(raw.names)
+    raw.seen.add(name)
+    raw.depth.append(depth)
     raw.names.append(name)
     raw.parents.append(parent)
     raw.offsets.append(None)
@@ -228,13 +254,22 @@ def _next_line(text: str, pos: int, line: int) -> tuple[str, int, int]:
     return "", pos, line
 
 
-def _parse_motion(text: str, source: str, first_line: int, raw: RawBVH) -> None:
-    _, pos, line = _next_line(text, 0, first_line)  # the MOTION line itself
+def _parse_motion(text: str, start: int, source: str, first_line: int, raw: RawBVH) -> None:
+    _, pos, line = _next_line(text, start, first_line)  # the MOTION line itself
     frames_line, pos, line = _next_line(text, pos, line + 1)
     m = re.fullmatch(r"Frames\s*:\s*(\d+)", frames_line, re.I)
     if m is None:
         raise bvh_error(source, line, f"expected 'Frames: <count>' after MOTION, found {frames_line!r}", "fix it")
     frames = int(m.group(1))
+    width, joints = sum(len(c) for c in raw.channels), len(raw.names)
+    if frames > MAX_FRAMES or frames * width > MAX_VALUES or frames * joints > MAX_FRAME_JOINTS:
+        raise bvh_error(
+            source,
+            line,
+            f"'Frames: {frames}' x {width} channels x {joints} joints is more than this reader takes ({MAX_FRAMES} "
+            f"frames, {MAX_VALUES} values, {MAX_FRAME_JOINTS} frames x joints)",
+            "split the capture into shorter files",
+        )
     time_line, pos, line = _next_line(text, pos, line + 1)
     m = re.fullmatch(r"Frame\s*Time\s*:\s*(\S+)", time_line, re.I)
     try:
@@ -248,22 +283,34 @@ def _parse_motion(text: str, source: str, first_line: int, raw: RawBVH) -> None:
             f"expected 'Frame Time: <seconds>' with a positive number, found {time_line!r}",
             "write the seconds per frame, e.g. 'Frame Time: 0.0333333' for 30 fps",
         )
+    if not MIN_FRAME_TIME <= frame_time <= MAX_FRAME_TIME:
+        raise bvh_error(
+            source,
+            line,
+            f"'Frame Time: {frame_time:g}' seconds per frame is outside {MIN_FRAME_TIME:g}..{MAX_FRAME_TIME:g} s",
+            "write the seconds per frame (1 / fps, e.g. 0.0333333 for 30 fps), not the frame rate or a duration",
+        )
     raw.frame_time = frame_time
-    raw.values = _parse_values(text[pos:], source, line + 1, frames, sum(len(c) for c in raw.channels))
+    raw.values = _parse_values(text[pos:], source, line + 1, frames, width)
 
 
 def _parse_values(data: str, source: str, first_line: int, frames: int, width: int) -> np.ndarray:
-    tokens = data.split()
-    try:
-        values = np.array(tokens, dtype=np.float64)  # one C-level pass; the slow search below runs only on errors
-    except ValueError:
-        bad = next((i for i, t in enumerate(tokens) if not _is_float(t)), 0)
+    """The (frames, width) value table, parsed in C without a Python list of tokens; the slow search for a bad
+    token runs only on errors."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)  # numpy's "could not be read to its end" -> ValueError
+        try:  # (numpy reads a string of only whitespace as [-1.0])
+            values = np.fromstring(data, dtype=np.float64, sep=" ") if re.search(r"\S", data) else np.zeros(0)
+        except ValueError:
+            values = None
+    if values is None:
+        bad, token = next(((i, t) for i, t in _tokens(data) if not _is_float(t)), (0, data.split(None, 1)[0]))
         raise bvh_error(
             source,
             _token_line(data, bad, first_line),
-            f"non-numeric value {tokens[bad]!r} in the MOTION data",
+            f"non-numeric value {token[:40]!r} in the MOTION data",
             "every value after 'Frame Time' must be a number; fix or re-export the file",
-        ) from None
+        )
     if values.size != frames * width:
         raise bvh_error(source, None, *_count_problem(frames, width, values.size))
     finite = np.isfinite(values)
@@ -272,10 +319,15 @@ def _parse_values(data: str, source: str, first_line: int, frames: int, width: i
         raise bvh_error(
             source,
             _token_line(data, bad, first_line),
-            f"{tokens[bad]!r} (NaN or Inf) in the MOTION data",
+            f"{next(t for i, t in _tokens(data) if i == bad)[:40]!r} (NaN or Inf) in the MOTION data",
             "the exporter wrote an invalid number; re-export the clip or drop the frame",
         )
     return values.reshape(frames, width)
+
+
+def _tokens(data: str):
+    """(index, token) of the whitespace-separated tokens of `data`, one at a time (error path only)."""
+    return ((i, m.group()) for i, m in enumerate(re.finditer(r"\S+", data)))
 
 
 def _count_problem(frames: int, width: int, found: int) -> tuple[str, str]:
@@ -295,11 +347,12 @@ def _count_problem(frames: int, width: int, found: int) -> tuple[str, str]:
 
 
 def _is_float(token: str) -> bool:
+    """Whether numpy reads `token` as a number (Python's float also takes '1_000')."""
     try:
-        float(token)
+        np.float64(token)
     except ValueError:
         return False
-    return True
+    return "_" not in token
 
 
 def _token_line(data: str, index: int, first_line: int) -> int:

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from motiondiff.data.formats.array_bounds import check_array_file
 from motiondiff.data.formats.bvh import BVHMotion, motion_from_arrays
 from motiondiff.kinematics import forward_kinematics
 from motiondiff.rotations import quat_to_matrix, rotvec_to_quat
@@ -101,6 +102,7 @@ def load_smpl_body(path) -> SmplBody:
     if not path.is_file():
         raise SmplParamsError(f"smpl_model={path} not found (relative to {Path.cwd()}); check the path")
     try:
+        check_array_file(path)  # from the headers: a few MB of .npz may inflate to GBs
         with np.load(path, allow_pickle=False) as data:
             arrays = {k: np.asarray(data[k]) for k in data.files if k in (*MODEL_KEYS, "weights", "f", "posedirs")}
     except (ValueError, OSError, EOFError) as err:

@@ -38,6 +38,7 @@ from motiondiff.atomic import atomic_write
 from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.bvh import BVHError, parse_bvh
 from motiondiff.data.formats.joint_map import JointMap
+from motiondiff.data.formats.up_axis import parse_up_axis
 from motiondiff.data.preparing.captions import GENERATED_NOTE
 from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import PrepareError, check_output, copy_license, process_and_write
@@ -167,27 +168,29 @@ def resolve_joint_map(spec: str, files, units_to_metres: float | None) -> JointM
         except (FileNotFoundError, ValueError, KeyError) as err:
             raise PrepareError(f"--joint-map {spec}: {err}") from None
         return jm if units_to_metres is None else replace(jm, units_to_metres=float(units_to_metres))
+    first_error = None
     for src, n, _ in files:
         try:
             motion = parse_bvh(src.read_text(n), source=n)
-        except (BVHError, SourceError):
+        except (BVHError, SourceError) as err:
+            first_error = first_error or err
             continue  # the worker reports it with the reason
         try:
             return JointMap.infer(motion.joint_names, motion.parents, units_to_metres, offsets=motion.offsets,
                                   source=f"auto({n})")  # fmt: skip
         except ValueError as err:
             raise PrepareError(f"--joint-map auto on {src.path}/{n}: {err}") from None
-    raise PrepareError("no BVH file could be read to infer the joint map (see the files' errors with --workers 1)")
+    raise PrepareError(f"no BVH file could be read to infer the joint map; the first: {first_error}")
 
 
-def bvh_options(labels, joint_map: str, units_to_metres, per_group, max_frames, compact, seed) -> dict:
+def bvh_options(labels, joint_map: str, units_to_metres, per_group, max_frames, compact, seed, up_axis="auto") -> dict:
     """What a prepared folder was made with (saved in report.json; ensure_prepared_bvh compares it)."""
     labels_path = None if labels is None else Path(labels).resolve()
     digest = None if labels_path is None or not labels_path.is_file() else _sha256(labels_path)
     jm = joint_map if joint_map == "auto" or Path(joint_map).suffix != ".json" else str(Path(joint_map).resolve())
     options = {"source_type": "bvh", "compact": compact, "per_group": per_group, "max_frames": max_frames,
                "seed": seed, "labels": None if labels_path is None else str(labels_path), "labels_sha256": digest,
-               "joint_map": jm, "units_to_metres": units_to_metres}  # fmt: skip
+               "joint_map": jm, "units_to_metres": units_to_metres, "up_axis": str(up_axis)}  # fmt: skip
     return json.loads(json.dumps(options))
 
 
@@ -208,17 +211,24 @@ def prepare_bvh(
     workers: int | None = None,
     force: bool = False,
     progress: bool = True,
+    up_axis: str = "auto",
 ) -> dict:
-    """Prepare BVH folders/zips into `out`; returns the report (also saved as report.json)."""
+    """Prepare BVH folders/zips into `out`; returns the report (also saved as report.json). `up_axis`: "auto" (each
+    file's own, `motiondiff.data.formats.up_axis`; files it cannot decide are skipped with the reason) or a forced
+    "y", "z", ... for every file; Z-up files are turned to Y-up."""
     out = Path(out)
     check_output(out, force)
+    try:
+        parse_up_axis(up_axis)
+    except ValueError as err:
+        raise PrepareError(f"--up-axis: {err}".replace("up_axis=", "")) from None
     if not sources:
         raise PrepareError("no --src given")
     srcs = [Source(p) for p in sources]
     files = list_files(srcs)
     clips = make_clips(files, {} if labels is None else read_labels(labels, files))
     jm = resolve_joint_map(joint_map, files, units_to_metres)
-    options = bvh_options(labels, joint_map, units_to_metres, per_group, max_frames, compact, seed)
+    options = bvh_options(labels, joint_map, units_to_metres, per_group, max_frames, compact, seed, up_axis)
     human = sum(c.captions is not None for c in clips)
     note = (
         f"{human} of {len(clips)} file(s) with human-written captions from the labels file, the others "
@@ -241,7 +251,7 @@ def _write_readme(out: Path, sources, report: dict, meta: dict, name: str) -> No
     cmd = "python -m motiondiff.data.preparing.prepare bvh " + " ".join(f"--src {Path(p).name}" for p in sources)
     cmd += f" --labels {Path(o['labels']).name}" if o["labels"] else ""
     cmd += f" --joint-map {o['joint_map']}"
-    cmd += "".join(f" --{k.replace('_', '-')} {o[k]}" for k in ("units_to_metres", "per_group", "max_frames")
+    cmd += "".join(f" --{k.replace('_', '-')} {o[k]}" for k in ("units_to_metres", "per_group", "max_frames", "up_axis")
                    if o[k] is not None)  # fmt: skip
     cmd += " --compact" * bool(o["compact"]) + f" --seed {o['seed']} --out {name}"
     clips = report["clips"]
@@ -274,8 +284,9 @@ def ensure_prepared_bvh(
     holding anything else prepared is left alone (PrepareError). `opts`: prepare_bvh's keyword arguments."""
     sources = [src] if isinstance(src, str | Path) else list(src)
     out = Path(out)
-    keys = ("units_to_metres", "per_group", "max_frames", "compact", "seed")
-    defaults = {"units_to_metres": None, "per_group": None, "max_frames": None, "compact": False, "seed": 0}
+    keys = ("units_to_metres", "per_group", "max_frames", "compact", "seed", "up_axis")
+    defaults = {"units_to_metres": None, "per_group": None, "max_frames": None, "compact": False, "seed": 0,
+                "up_axis": "auto"}  # fmt: skip
     wanted = bvh_options(labels, joint_map, *({**defaults, **opts}[k] for k in keys))
     report_path = out / "report.json"
     if (out / "meta.json").is_file() and report_path.is_file():

@@ -78,6 +78,8 @@ def print_report(report: dict, out: Path) -> None:
         print(f"\n{kind[4:]:<22}" + "".join(f"{s:>7}" for s in SPLITS))
         for n in names:
             print(f"  {n:<20}" + "".join(f"{report[kind][s].get(n, 0):>7}" for s in SPLITS))
+    if set(report.get("up_axes", {})) - {"+y"}:
+        print("\nup axes of the files (turned to +y): " + ", ".join(f"{a} {n}" for a, n in report["up_axes"].items()))
     print(f"\nskipped {len(report['skipped'])} clip(s)")
     for item in report["skipped"]:
         print(f"  {item['clip']}: {item['reason']}")
@@ -114,6 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--labels", help="CSV with a header: file (required), action, style, caption (several: a|b)")
     v.add_argument("--joint-map", default="auto", help="auto (from joint names), a shipped map name or path.json")
     v.add_argument("--units-to-metres", type=float, help="factor from file units to metres (default: guessed)")
+    v.add_argument("--up-axis", default="auto", help="auto (detected per file), y, z, x, -y, -z or -x (forced)")
     add_common_arguments(v)
     return parser
 
@@ -136,7 +139,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.dataset == "bvh":
             from motiondiff.data.preparing.from_bvh import prepare_bvh
 
-            report = prepare_bvh(args.src, args.out, args.labels, args.joint_map, args.units_to_metres, **common)
+            report = prepare_bvh(args.src, args.out, args.labels, args.joint_map, args.units_to_metres,
+                                 up_axis=args.up_axis, **common)  # fmt: skip
         else:
             report = prepare_bandai(args.src, args.out, caption_variants=args.caption_variants,
                                     rare_to_train=args.rare_to_train, held_out=args.held_out, **common)  # fmt: skip

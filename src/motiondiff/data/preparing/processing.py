@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motiondiff.data.formats.bvh import BVHMotion
+from motiondiff.data.formats.bvh_parse import MAX_FRAME_JOINTS
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.preparing.captions import MotionFacts, measure
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face
@@ -17,6 +18,7 @@ from motiondiff.skeleton import SMPL22, Skeleton
 TARGET_FPS = 20.0
 MIN_FRAMES = 2  # features need two frames; datasets apply their own, larger minimum when loading
 BONE_TOLERANCE = 1e-3  # metres; non-root joints must keep a constant offset (rigid bones)
+MAX_RESAMPLED_FRAMES = 200_000  # frames at TARGET_FPS a clip may become (2.8 hours)
 
 
 class ClipError(ValueError):
@@ -44,6 +46,7 @@ class ProcessedClip:
     native_root: np.ndarray  # (N, 3) float32
     native: NativeSkeleton
     facts: MotionFacts
+    up_axis: str = "+y"  # the file's up axis, turned to +y
 
 
 def _collapse_placeholder_root(motion: BVHMotion) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
@@ -84,15 +87,22 @@ def process_motion(
     joint_map: JointMap,
     window: tuple[int, int] | None = None,
     skeleton_name: str = "native",
+    turn: np.ndarray | None = None,
 ) -> ProcessedClip:
-    """Resample to 20 fps, keep `window` (start, stop) frames at 20 fps if given, convert to metres, map to SMPL-22
-    and canonicalise (floor, origin, facing +Z) both the 22 joints (with HumanML3D's uniform skeleton) and the
-    native skeleton (same placement rule, its own bones)."""
+    """Resample to 20 fps (only the `window` (start, stop) frames at 20 fps if given), turn the axes by `turn` (3, 3)
+    if given (`BVHMotion.rotated`, e.g. Z-up to Y-up), convert to metres, map to SMPL-22 and canonicalise (floor,
+    origin, facing +Z) both the 22 joints (with HumanML3D's uniform skeleton) and the native skeleton (same
+    placement rule, its own bones)."""
     if motion.num_frames < 1:
         raise ClipError("the file has no frames")
-    m = motion.resample(TARGET_FPS).scaled(joint_map.units_to_metres)
-    if window is not None:
-        m = m.slice(*window)
+    total = motion.resampled_frames(TARGET_FPS)
+    kept = total if window is None else max(min(window[1], total) - window[0], 0)
+    if total > MAX_RESAMPLED_FRAMES or kept * motion.num_joints > MAX_FRAME_JOINTS:
+        raise ClipError(f"{motion.num_frames} frames at {motion.fps:g} fps make {total} frames at {TARGET_FPS:g} fps "
+                        f"of {motion.num_joints} joints, more than {MAX_RESAMPLED_FRAMES} frames or "
+                        f"{MAX_FRAME_JOINTS} frames x joints; split the capture into shorter files")  # fmt: skip
+    m = motion.resample(TARGET_FPS, window)
+    m = (m if turn is None else m.rotated(turn)).scaled(joint_map.units_to_metres)
     if m.num_frames < MIN_FRAMES:
         raise ClipError(f"only {m.num_frames} frame(s) at {TARGET_FPS:g} fps; at least {MIN_FRAMES} are needed")
     world = m.positions()

@@ -24,6 +24,7 @@ from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.bvh import BVHError, parse_bvh
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.formats.prepared import SPLITS, fill_derived, save_split
+from motiondiff.data.formats.up_axis import FORCE_HINT, bvh_up_axis
 from motiondiff.data.preparing.captions import GENERATED_NOTE, generate_captions, normalise_caption
 from motiondiff.data.preparing.processing import (
     TARGET_FPS,
@@ -47,6 +48,7 @@ class Job:
     bvh_name: str
     name: str
     max_frames: int | None
+    up_axis: str = "y"  # "auto": detected per clip (`bvh_up_axis`), else forced; Bandai's files are Y-up
 
 
 # ---- per-clip work (runs in worker processes) ----------------------------------------------------------------
@@ -67,9 +69,15 @@ def _process(job: Job) -> ProcessedClip | str:
         lacking = sorted(_JOINT_MAP.source_joints() - set(motion.joint_names))
         if lacking:
             return f"its skeleton lacks {', '.join(lacking)}, which the joint map {_JOINT_MAP.source} reads"
-        clip = process_motion(motion, _JOINT_MAP)
+        up = bvh_up_axis(motion, _JOINT_MAP, up_axis=job.up_axis, warn=False)
+        if not up.decided:
+            return f"cannot tell its up axis ({up.reason}); {FORCE_HINT.replace('up_axis=', '--up-axis ')}"
+        turn = None if up.axis == "+y" else up.matrix
+        clip = process_motion(motion, _JOINT_MAP, turn=turn)
         if job.max_frames is not None and len(clip.joints) > job.max_frames:
-            clip = process_motion(motion, _JOINT_MAP, window=most_active_window(clip.joints, job.max_frames))
+            window = most_active_window(clip.joints, job.max_frames)
+            clip = process_motion(motion, _JOINT_MAP, window=window, turn=turn)
+        clip.up_axis = up.axis
         return clip
     except (BVHError, ClipError, SourceError) as err:
         return str(err)
@@ -102,7 +110,8 @@ def process_and_write(
         keep = stratified_subset([c.name for c in clips], groups, per_group, seed)
         clips, groups = [clips[i] for i in keep], [groups[i] for i in keep]
 
-    jobs = [Job(str(c.source.path), c.bvh_name, c.name, max_frames) for c in clips]
+    up_axis = str(options.get("up_axis") or "y")
+    jobs = [Job(str(c.source.path), c.bvh_name, c.name, max_frames, up_axis) for c in clips]
     results = _run(jobs, joint_map, workers, progress)
     kept = []
     for clip, group, res in zip(clips, groups, results, strict=True):
@@ -280,6 +289,7 @@ def _report(per_split, skipped, sources, joint_map, options: dict) -> dict:
         "per_content": count("content"),
         "per_style": count("style"),
         "skipped": [{"clip": n, "reason": r} for n, r in skipped],
+        "up_axes": dict(sorted(Counter(r.up_axis for s in SPLITS for _, r in per_split[s]).items())),
         "joint_map": f"{joint_map.source}->{joint_map.target}",
         "options": dict(options),
     }
