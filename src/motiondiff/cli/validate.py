@@ -17,6 +17,14 @@ from omegaconf import DictConfig, OmegaConf
 from motiondiff.errors import UsageError
 
 
+def _first(*values):
+    return next((v for v in values if v is not None), None)
+
+
+def _number(bound: float) -> str:
+    return str(bound) if isinstance(bound, int) else f"{bound:g}"  # an integer prints whole (2**63-1, not 9.2e+18)
+
+
 @dataclass(frozen=True)
 class Rule:
     kind: type  # int or float (an int passes as a float); str for a choice
@@ -35,9 +43,14 @@ class Rule:
         if self.choices:
             return "one of " + ", ".join(map(str, self.options))
         parts = ["an integer" if self.kind is int else "a number"]
+        lower, upper = _first(self.low, self.above), _first(self.high, self.below)
+        if lower is not None and upper is not None:  # a two-sided range as an interval: "in (0, 1]"
+            left, right = "[" if self.low is not None else "(", "]" if self.high is not None else ")"
+            parts.append(f"in {left}{_number(lower)}, {_number(upper)}{right}")
+            return " ".join(parts) + (" (or null)" if self.optional else "")
         for sign, bound in ((">=", self.low), (">", self.above), ("<=", self.high), ("<", self.below)):
-            if bound is not None:  # an integer bound prints whole (2**63-1, not 9.22337e+18)
-                parts.append(f"{sign} {bound}" if isinstance(bound, int) else f"{sign} {bound:g}")
+            if bound is not None:
+                parts.append(f"{sign} {_number(bound)}")
         return " ".join(parts) + (" (or null)" if self.optional else "")
 
     def accepts(self, value) -> bool:
@@ -86,7 +99,7 @@ RULES_SAMPLE = {
 RULES_EDIT = {
     **RULES_SAMPLE, "start": Rule(float, low=0), "prefix": Rule(float, low=0), "suffix": Rule(float, low=0),
     "prefix_s": Rule(float, low=0, optional=True), "suffix_s": Rule(float, low=0, optional=True),
-    "hold_from": Rule(float, low=0, high=1), "reconstruction": Rule(float, low=0), "resample": POSITIVE_INT,
+    "hold_from": Rule(float, above=0, high=1), "reconstruction": Rule(float, low=0), "resample": POSITIVE_INT,
     "boundary_blend": Rule(int, low=0),
 }  # fmt: skip
 RULES_EVALUATE = {
