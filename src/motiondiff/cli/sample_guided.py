@@ -14,6 +14,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.atomic import write_json
+from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.cli.common import UsageError, find_checkpoint
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
 from motiondiff.hardware import resolve_device
@@ -61,7 +62,10 @@ def run(cfg: DictConfig) -> Path:
     if cfg.checkpoint in ("shipped", "latest", "best"):
         raise UsageError("method=guidedmotion needs checkpoint=<path to a train_latent.py checkpoint>")
     path = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
-    module = HierarchicalLatentModule.load_from_checkpoint(path, map_location=cfg.device, weights_only=True).eval()
+    with reading(path, "latent checkpoint", "give the .ckpt that train_latent.py wrote"):
+        module = HierarchicalLatentModule.load_from_checkpoint(path, map_location=cfg.device, weights_only=True)
+    check_finite_state(module.state_dict(), f"latent checkpoint {path}", "give the .ckpt that train_latent.py wrote")
+    module.eval()
     check_formats_for(formats, module.decoder.representation.skeleton, cfg.get("bvh_names"), body)
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")

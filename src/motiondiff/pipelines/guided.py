@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.errors import UsageError
 from motiondiff.guided.local_actions import (
     LocalActionError,
@@ -58,7 +59,11 @@ class GuidedMotionPipeline:
         path = Path(path)
         if not path.is_file():
             raise UsageError(f"no latent model at {path}: give the .ckpt that train_latent.py wrote")
-        latent = HierarchicalLatentModule.load_from_checkpoint(path, map_location=device, weights_only=True)
+        with reading(path, "latent checkpoint", "give the .ckpt that train_latent.py wrote"):
+            latent = HierarchicalLatentModule.load_from_checkpoint(path, map_location=device, weights_only=True)
+        check_finite_state(
+            latent.state_dict(), f"latent checkpoint {path}", "give the .ckpt that train_latent.py wrote"
+        )
         mdm = None if local_model is None else load_model(resolve_model(local_model), device)
         return cls(latent, mdm, str(path))
 
