@@ -14,19 +14,20 @@ import zipfile
 from pathlib import Path
 
 import torch
+from safetensors import SafetensorError
 
 from motiondiff.errors import UsageError
 
 CKPT_FIX = "give a checkpoint a motiondiff run wrote (its last.ckpt or best-fid-*.ckpt) or a release (.safetensors)"
 # What reading or rebuilding from a broken or foreign file raises (a UsageError, a ValueError, passes unchanged).
 LOAD_ERRORS = (pickle.UnpicklingError, EOFError, RuntimeError, KeyError, TypeError, ValueError, AttributeError,
-               IndexError, zipfile.BadZipFile, AssertionError)  # fmt: skip
+               IndexError, zipfile.BadZipFile, AssertionError, SafetensorError)  # fmt: skip
 
 
 def reason(err: BaseException) -> str:
     """A short, safe account of why a file did not load (never torch's weights_only=False advice)."""
     text = str(err)
-    refused = re.search(r"(?:Unsupported global: GLOBAL|unsupported GLOBAL|global) '?([\w.]+\.[\w]+)", text)
+    refused = re.search(r"Unsupported global: GLOBAL ([\w.]+)", text)
     if isinstance(err, pickle.UnpicklingError) and refused:
         return f"it would import {refused.group(1)} while loading (code, not saved weights); nothing was run"
     if "weights_only" in text or "Weights only load failed" in text:

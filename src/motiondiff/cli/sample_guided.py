@@ -13,7 +13,7 @@ import numpy as np
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.atomic import write_json
+from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.cli.common import UsageError, find_checkpoint
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
@@ -104,6 +104,6 @@ def run(cfg: DictConfig) -> Path:
         "local_actions": result.info["local_actions"],
         "samples": rows,
     }  # fmt: skip
-    write_json(out / "results.json", summary)
+    write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
     print(f"\n{len(rows)} GuidedMotion sample(s) of {text!r} written to {out}")
     return out

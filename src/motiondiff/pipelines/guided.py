@@ -26,7 +26,7 @@ from motiondiff.guided.local_actions import (
     local_descriptions,
 )
 from motiondiff.lit.conditions import text_encoder_kwargs
-from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
+from motiondiff.lit.generation import SAMPLE_BATCH, check_finite_output, check_num_samples
 from motiondiff.lit.latent import LATENT_SAMPLERS, HierarchicalLatentModule
 from motiondiff.lit.loading import load_model
 from motiondiff.models.hierarchical import LEVELS
@@ -116,6 +116,7 @@ class GuidedMotionPipeline:
         except LocalActionError as err:
             raise UsageError(str(err)) from None
         feats = [f for f in self.latent.denormalise(feats).cpu().numpy()]
+        check_finite_output(feats, "the GuidedMotion motion")
         rep = self.latent.decoder.representation
         joints = [rep.decode_numpy(f).astype(np.float32) for f in feats]
         weights = [1.0] * len(local.texts) if local_weights is None else [float(w) for w in local_weights]
