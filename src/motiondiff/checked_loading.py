@@ -45,6 +45,10 @@ def reading(path: str | Path, what: str = "checkpoint", fix: str = CKPT_FIX):
         yield
     except UsageError:
         raise
+    except OSError as err:  # torch reading a cut zip: EINVAL with no file name; a missing or locked file has one
+        if err.filename is not None:
+            raise
+        raise UsageError(f"{what} {path} cannot be loaded: the file is truncated or corrupt ({err}); {fix}") from None
     except LOAD_ERRORS as err:
         raise UsageError(f"{what} {path} cannot be loaded: {reason(err)}; {fix}") from None
 
@@ -66,8 +70,8 @@ def check_finite_state(state: dict, source: str | Path, fix: str = CKPT_FIX) -> 
                          f"weights are corrupt or diverged; {fix}")  # fmt: skip
 
 
-def check_same_shapes(state: dict, own: dict, source: str | Path, fix: str) -> None:
-    """Refuse weights whose names, shapes or dtypes differ from the model's own (another architecture)."""
+def check_same_shapes(state: dict, own: dict, source: str | Path, fix: str, model: str = "its model") -> None:
+    """Refuse weights whose names, shapes or dtypes differ from ``model``'s own (another architecture)."""
     missing = [k for k in own if k not in state]
     unexpected = [k for k in state if k not in own]
     shapes = [f"{k} {tuple(state[k].shape)} vs {tuple(own[k].shape)}" for k in state
@@ -78,4 +82,4 @@ def check_same_shapes(state: dict, own: dict, source: str | Path, fix: str) -> N
     if missing or unexpected or shapes or dtypes:
         found = [f"{len(x)} {name} (first {x[0]})" for name, x in (("missing", missing), ("unexpected", unexpected),
                  ("of another shape", shapes), ("of another dtype", dtypes)) if x]  # fmt: skip
-        raise UsageError(f"{source} does not fit the model it describes: tensors {'; '.join(found)}; {fix}")
+        raise UsageError(f"{source} does not fit {model}: tensors {'; '.join(found)}; {fix}")

@@ -68,7 +68,9 @@ def load_release(path: str | Path, device: str = "cpu"):
     check_finite_state(state, f"release weights {weights}", RESTORE)
     with reading(config, "release config", RESTORE):
         module = MotionDiffusionModule(**meta["hparams"])
-    check_same_shapes(state, module.state_dict(), f"release weights {weights}", RESTORE)
+    check_same_shapes(
+        state, module.state_dict(), f"release weights {weights}", RESTORE, f"the model {config.name} describes"
+    )
     module.load_state_dict(state, strict=True)
     return module.to(device).eval()
 

@@ -99,6 +99,10 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
     log.info("initialised from %s (%d tensors)", source, len(state))
 
 
+# What Lightning's resume reads besides the weights (a checkpoint without them is weights only: init_from=).
+LIGHTNING_KEYS = ("pytorch-lightning_version", "epoch", "global_step", "optimizer_states", "loops")
+
+
 def _state_dict(checkpoint: dict, path: Path) -> dict:
     from motiondiff.checked_loading import CKPT_FIX
 
@@ -117,13 +121,17 @@ def check_resume(ckpt: str, module: MotionDiffusionModule, batch_size: int) -> N
     path = Path(ckpt)
     checkpoint = torch_load(path, f"ckpt_path={ckpt}: the checkpoint")
     state = _state_dict(checkpoint, path)
+    lacking = [k for k in LIGHTNING_KEYS if k not in checkpoint]
+    if lacking:
+        raise UsageError(f"ckpt_path={ckpt} is not a training checkpoint to resume (it has no {lacking[0]!r}): "
+                         "resume from a run's last.ckpt, or start from its weights with init_from=")  # fmt: skip
     saved = checkpoint.get(KEY) if isinstance(checkpoint.get(KEY), dict) else {}
     if "batch_size" in saved and saved["batch_size"] != batch_size:
         raise UsageError(f"ckpt_path={ckpt} was trained with batch_size={saved['batch_size']}: resume with the same "
                          f"batch_size (got {batch_size}) or use init_from= to fine-tune")  # fmt: skip
     check_finite_state(state, f"ckpt_path={ckpt}")
     fix = "resume with the settings of its run (its .hydra/overrides.yaml), or start anew with init_from="
-    check_same_shapes(state, module.state_dict(), f"ckpt_path={ckpt} (another architecture)", fix)
+    check_same_shapes(state, module.state_dict(), f"ckpt_path={ckpt}", fix, "this run's model (another architecture)")
 
 
 def evaluation_callbacks(callbacks: list) -> list:
