@@ -82,7 +82,6 @@ RULES_TRAIN = {
 RULES_SAMPLE = {
     **COMMON, "num_samples": POSITIVE_INT, "length": Rule(float, above=0, optional=True),
     "frames": Rule(int, low=1, optional=True), "steps": Rule(int, low=1, optional=True),
-    "guidance": Rule(float, low=0, optional=True),
     "overlap": Rule(float, low=0), "blend": Rule(float, low=0), "smooth_sigma": Rule(float, low=0, optional=True),
 }  # fmt: skip
 RULES_EDIT = {
