@@ -167,7 +167,6 @@ CASES = [
         "does not fit",
         "another shape",
     ),  # fmt: skip
-    sample("missing_tensor", release(weights=lambda s: s.pop("denoiser.output_proj.bias")), "does not fit", "missing"),
     sample("unexpected_tensor", release(weights=lambda s: s.update(extra=torch.zeros(2))), "1 unexpected (first extra"),
     # the JSON: not JSON, not the schema, a path for a text encoder
     sample(
