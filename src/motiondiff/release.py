@@ -54,6 +54,7 @@ def save_release(module, path: str | Path, provenance: dict | None = None) -> tu
 
 def load_release(path: str | Path, device: str = "cpu"):
     """The module of a release, in eval mode (strict: every tensor must match the architecture in the JSON)."""
+    from motiondiff.data.representations.spec import bridge_from_spec
     from motiondiff.lit.diffusion import MotionDiffusionModule
 
     weights, config = release_paths(path)
@@ -68,6 +69,11 @@ def load_release(path: str | Path, device: str = "cpu"):
     check_finite_state(state, f"release weights {weights}", RESTORE)
     with reading(config, "release config", RESTORE):
         module = MotionDiffusionModule(**meta["hparams"])
+        bridge_from_spec(meta["hparams"].get("representation"), meta["hparams"]["feature_dim"])  # what saving reads
+    if module.representation.dim != meta["hparams"]["feature_dim"]:
+        raise UsageError(f"release config {config}: representation {module.representation.name} has "
+                         f"{module.representation.dim} features, not feature_dim={meta['hparams']['feature_dim']}; "
+                         f"{RESTORE}")  # fmt: skip
     check_same_shapes(
         state, module.state_dict(), f"release weights {weights}", RESTORE, f"the model {config.name} describes"
     )

@@ -20,6 +20,7 @@ FORMAT = "motiondiff-release-1"
 TOP_KEYS = {"format", "class", "hparams", "provenance", "weights_sha256"}
 CONDITION_KINDS = ("text", "action", "none")
 ENCODER_KEYS = {"name", "dim", "max_length"}  # never "path": a release names its encoder, the user's config finds it
+MAX_CONFIG_BYTES = 10 << 20  # a release JSON is kilobytes (hyper-parameters, statistics, provenance)
 RESTORE = "restore the release (`git checkout -- checkpoints` for a shipped one) or release the checkpoint again"
 
 
@@ -33,10 +34,14 @@ def sha256_of(path: str | Path) -> str:
 
 
 def read_release_json(config: Path) -> dict:
-    """The parsed JSON of a release, or one UsageError for a file that is not JSON."""
+    """The parsed JSON of a release, or one UsageError for a file that is not JSON (or far too big to be one)."""
+    size = config.stat().st_size
+    if size > MAX_CONFIG_BYTES:
+        raise UsageError(f"release config {config} has {size} bytes, more than a release's JSON ever needs "
+                         f"({MAX_CONFIG_BYTES >> 20} MiB); {RESTORE}")  # fmt: skip
     try:
         meta = json.loads(config.read_bytes().decode("utf-8"), parse_constant=_no_constant)
-    except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as err:
+    except (UnicodeDecodeError, json.JSONDecodeError, ValueError, RecursionError) as err:
         raise UsageError(f"release config {config} is not valid JSON ({_short(err)}); {RESTORE}") from None
     if not isinstance(meta, dict):
         raise UsageError(f"release config {config} holds {type(meta).__name__}, not a JSON object; {RESTORE}")

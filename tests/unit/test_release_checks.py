@@ -155,3 +155,17 @@ def test_the_safe_unpickler_refuses_in_one_line(tmp_path):
     path.write_bytes(pickle.dumps({"a": 1})[:-3])
     with pytest.raises(UsageError, match="not a readable pickle"):
         load_pickle(path)
+
+
+def test_an_oversized_or_deeply_nested_config_is_refused(release):
+    release.with_suffix(".json").write_bytes(b" " * (11 << 20))
+    _refused(release, "bytes")
+    release.with_suffix(".json").write_text("[" * 100_000 + "]" * 100_000)
+    _refused(release, "not valid JSON")
+
+
+def test_a_representation_of_another_width_is_refused(release):
+    meta = _meta(release)
+    meta["hparams"]["representation"]["name"] = "kit251"
+    _write_meta(release, meta)
+    _refused(release, "model.json")
