@@ -169,3 +169,14 @@ def test_a_representation_of_another_width_is_refused(release):
     meta["hparams"]["representation"]["name"] = "kit251"
     _write_meta(release, meta)
     _refused(release, "model.json")
+
+
+def test_a_release_naming_clip_takes_its_folder_from_the_environment(monkeypatch):
+    from motiondiff.lit.conditions import CLIP_PATH_ENV, text_encoder_kwargs
+
+    monkeypatch.delenv(CLIP_PATH_ENV, raising=False)
+    with pytest.raises(UsageError, match=CLIP_PATH_ENV):
+        text_encoder_kwargs({"name": "clip", "dim": 512})
+    monkeypatch.setenv(CLIP_PATH_ENV, "/models/clip")
+    assert text_encoder_kwargs({"name": "clip", "dim": 512}) == {"name": "clip", "path": "/models/clip"}
+    assert text_encoder_kwargs({"name": "minilm", "dim": 384}) == {"name": "minilm"}
