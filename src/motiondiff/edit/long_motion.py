@@ -178,6 +178,7 @@ def generate_long(
             window = Window(plan, _denormalise(out, mean, std), np.zeros(num_samples), np.zeros((num_samples, 3)))
         else:
             window = _continue(module, motion, plan, cond, mean, std, generator=generator, **held_kwargs)
+        check_finite_output(window.features, "the long motion")  # at once: the next window continues from it
         windows.append(window)
         placed = from_canonical(rep, window.features, window.yaw, window.offset)
         # the blended frames replace the motion's last ones (hml: rows before them decode unchanged)
