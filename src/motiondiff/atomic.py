@@ -40,3 +40,19 @@ def write_json(path: str | os.PathLike, data, **dumps) -> Path:
 
     text = json.dumps(data, indent=1, allow_nan=False, **dumps)
     return atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+
+
+def finite_or_null(data):
+    """``data`` with every NaN or infinite float replaced by None (JSON null): for metrics that can be undefined
+    (a distance over too few motions), which strict JSON cannot hold as numbers."""
+    import math
+
+    if isinstance(data, float):
+        return data if math.isfinite(data) else None
+    if isinstance(data, dict):
+        return {k: finite_or_null(v) for k, v in data.items()}
+    if isinstance(data, list | tuple):
+        return [finite_or_null(v) for v in data]
+    if hasattr(data, "item") and getattr(data, "ndim", None) == 0:  # numpy / torch scalars
+        return finite_or_null(data.item())
+    return data

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.atomic import atomic_write
+from motiondiff.atomic import finite_or_null, write_json
 
 REPO_DIR = Path(__file__).resolve().parents[2]
 PACKAGES = ("motiondiff", "torch", "lightning", "hydra-core", "omegaconf", "torchmetrics", "wandb",
@@ -58,4 +58,4 @@ def update_run_json(folder: Path, **fields) -> Path:
     path = Path(folder) / "run.json"
     record = json.loads(path.read_text()) if path.is_file() else {}
     record.update(fields)
-    return atomic_write(path, lambda tmp: Path(tmp).write_text(json.dumps(record, indent=1, default=str)))
+    return write_json(path, finite_or_null(record), default=str)

@@ -2,7 +2,8 @@
 
 A Lightning checkpoint is a pickle (optimizer state, callbacks, hyper-parameters); a released model needs none of
 that and must never run code when loaded. `save_release` keeps the module's persistent tensors (the EMA weights
-when training used EMA, since the checkpoint holds those) and `load_release` rebuilds the module from the JSON.
+when training used EMA, since the checkpoint holds those) and the weights' SHA-256; `load_release` checks the JSON
+(`release_checks`), the checksum and that every weight is finite before it rebuilds the module from the JSON.
 """
 
 from __future__ import annotations
@@ -14,8 +15,16 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from motiondiff.atomic import atomic_write
-
-FORMAT = "motiondiff-release-1"
+from motiondiff.checked_loading import check_finite_state, check_same_shapes, reading
+from motiondiff.errors import UsageError
+from motiondiff.release_checks import (
+    FORMAT,
+    RESTORE,
+    check_release_meta,
+    check_weights_checksum,
+    read_release_json,
+    sha256_of,
+)
 
 
 def release_paths(path: str | Path) -> tuple[Path, Path]:
@@ -30,32 +39,51 @@ def save_release(module, path: str | Path, provenance: dict | None = None) -> tu
     """Write `<stem>.safetensors` and `<stem>.json` for a MotionDiffusionModule (atomically, weights first)."""
     weights, config = release_paths(path)
     state = {k: v.detach().cpu().contiguous() for k, v in module.state_dict().items()}
+    check_finite_state(state, f"the model to release as {weights}", "release a checkpoint whose weights are finite")
     hparams = json.loads(json.dumps(dict(module.hparams), default=_plain))  # fails loudly on a non-JSON value
-    meta = {"format": FORMAT, "class": type(module).__name__, "hparams": hparams, "provenance": provenance or {}}
+    if isinstance(hparams.get("text_encoder"), dict):  # a release names its encoder; a local path stays local
+        hparams["text_encoder"].pop("path", None)
     weights.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(weights, lambda tmp: save_file(state, str(tmp)), suffix=".safetensors")
-    atomic_write(config, lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1)), suffix=".json")
+    meta = {"format": FORMAT, "class": type(module).__name__, "hparams": hparams, "provenance": provenance or {},
+            "weights_sha256": sha256_of(weights)}  # fmt: skip
+    text = json.dumps(meta, indent=1, allow_nan=False)
+    atomic_write(config, lambda tmp: Path(tmp).write_text(text), suffix=".json")
     return weights, config
 
 
 def load_release(path: str | Path, device: str = "cpu"):
     """The module of a release, in eval mode (strict: every tensor must match the architecture in the JSON)."""
+    from motiondiff.data.representations.spec import bridge_from_spec
     from motiondiff.lit.diffusion import MotionDiffusionModule
 
     weights, config = release_paths(path)
     for f in (weights, config):
         if not f.is_file():
-            raise FileNotFoundError(f"release file {f} is missing: a release is {weights.name} + {config.name}")
-    meta = json.loads(config.read_text())
-    if meta.get("format") != FORMAT:
-        raise ValueError(f"{config} is not a motiondiff release (format {meta.get('format')!r}, expected {FORMAT})")
-    module = MotionDiffusionModule(**meta["hparams"])
-    module.load_state_dict(load_file(str(weights), device="cpu"), strict=True)
+            raise UsageError(f"release file {f} is missing: a release is {weights.name} + {config.name} side by side")
+    meta = read_release_json(config)
+    check_release_meta(meta, config)  # before anything is built from it
+    check_weights_checksum(weights, config, meta["weights_sha256"])
+    with reading(weights, "release weights", RESTORE):
+        state = load_file(str(weights), device="cpu")
+    check_finite_state(state, f"release weights {weights}", RESTORE)
+    with reading(config, "release config", RESTORE):
+        module = MotionDiffusionModule(**meta["hparams"])
+        bridge_from_spec(meta["hparams"].get("representation"), meta["hparams"]["feature_dim"])  # what saving reads
+    if module.representation.dim != meta["hparams"]["feature_dim"]:
+        raise UsageError(f"release config {config}: representation {module.representation.name} has "
+                         f"{module.representation.dim} features, not feature_dim={meta['hparams']['feature_dim']}; "
+                         f"{RESTORE}")  # fmt: skip
+    check_same_shapes(
+        state, module.state_dict(), f"release weights {weights}", RESTORE, f"the model {config.name} describes"
+    )
+    module.load_state_dict(state, strict=True)
     return module.to(device).eval()
 
 
 def provenance_of(release: str | Path) -> dict:
-    return json.loads(release_paths(release)[1].read_text()).get("provenance", {})
+    provenance = read_release_json(release_paths(release)[1]).get("provenance", {})
+    return provenance if isinstance(provenance, dict) else {}
 
 
 def _plain(value):
@@ -79,11 +107,13 @@ def cpu_description() -> str:
 def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple[Path, Path]:
     """Release a training checkpoint (its EMA weights when it trained with EMA) with the training step, the run's
     command line and `provenance` (data, training time, machine, metrics) in the JSON."""
+    from motiondiff.checked_loading import torch_load
     from motiondiff.lit.diffusion import MotionDiffusionModule
     from motiondiff.provenance import git_state
 
-    state = torch.load(ckpt, map_location="cpu", weights_only=True)
-    module = MotionDiffusionModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
+    state = torch_load(ckpt)
+    with reading(ckpt, "checkpoint"):
+        module = MotionDiffusionModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
     run = Path(ckpt).resolve().parents[1] / "run.json"
     trained = json.loads(run.read_text())["provenance"] if run.is_file() else {}
     argv = trained.get("argv", [])

@@ -11,6 +11,8 @@ import pickle
 from collections.abc import Collection
 from pathlib import Path
 
+from motiondiff.errors import UsageError
+
 # What numpy arrays, dtypes and numpy scalars pickle to (numpy 1.x wrote `numpy.core`, numpy 2 writes `numpy._core`).
 # These only rebuild arrays from bytes; object arrays' items go through the same restricted unpickler.
 NUMPY_DATA: frozenset[tuple[str, str]] = frozenset(
@@ -28,6 +30,10 @@ BUILTIN_DATA: frozenset[tuple[str, str]] = frozenset(
 PLAIN_DATA = BUILTIN_DATA | NUMPY_DATA
 
 
+class RefusedPickle(UsageError, pickle.UnpicklingError):
+    """A pickle that names code, or is no pickle at all: one line naming the file (never a traceback)."""
+
+
 class _RestrictedUnpickler(pickle.Unpickler):
     def __init__(self, file, source: Path, allowed: Collection[tuple[str, str]]):
         super().__init__(file, encoding="latin1")  # Python 2 files: numpy's byte strings load as latin-1
@@ -35,7 +41,7 @@ class _RestrictedUnpickler(pickle.Unpickler):
 
     def find_class(self, module, name):
         if (module, name) not in self._allowed:
-            raise pickle.UnpicklingError(
+            raise RefusedPickle(
                 f"{self._source}: {module}.{name} is not allowed (only plain data - containers, numbers, strings"
                 f"{', numpy arrays' if self._allowed & NUMPY_DATA else ''} - may be loaded from this file)"
             )
@@ -55,8 +61,16 @@ def _numpy_module(module: str) -> str:
 
 def load_pickle(path: str | Path, allowed: Collection[tuple[str, str]] = PLAIN_DATA):
     """Unpickle `path`, resolving only the (module, name) globals in `allowed` (default: numpy arrays and builtin
-    containers). Anything else raises `pickle.UnpicklingError` naming the file and the refused global, before any
-    of the file's code could run."""
+    containers). Anything else raises `RefusedPickle` (a UsageError and a `pickle.UnpicklingError`) naming the file
+    and the refused global, before any of the file's code could run; so does a file that is not a whole pickle."""
     path = Path(path)
     with open(path, "rb") as f:
-        return _RestrictedUnpickler(f, path, allowed).load()
+        try:
+            return _RestrictedUnpickler(f, path, allowed).load()
+        except RefusedPickle:
+            raise
+        except (pickle.UnpicklingError, EOFError, ValueError, TypeError, IndexError, KeyError, AttributeError) as err:
+            raise RefusedPickle(
+                f"{path} is not a readable pickle ({type(err).__name__}: {str(err)[:120]}): restore "
+                "the file (it is truncated or corrupt)"
+            ) from None

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import json
 
 import pytest
@@ -11,7 +12,9 @@ from hydra import compose, initialize_config_dir
 from motiondiff.cli.common import REPO_DIR, register_resolvers
 from motiondiff.cli.train import build_module
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
+from motiondiff.errors import UsageError
 from motiondiff.release import load_release, save_release
+from motiondiff.release_checks import sha256_of
 
 register_resolvers()
 
@@ -45,8 +48,31 @@ def test_missing_or_foreign_files_are_refused(module, tmp_path):
     weights, config = save_release(module, tmp_path / "model")
     meta = json.loads(config.read_text())
     config.write_text(json.dumps({**meta, "format": "something-else"}))
-    with pytest.raises(ValueError, match="not a motiondiff release"):
+    with pytest.raises(UsageError, match="not a motiondiff release"):
         load_release(tmp_path / "model")
     weights.unlink()
-    with pytest.raises(FileNotFoundError, match="model.safetensors"):
+    with pytest.raises(UsageError, match="model.safetensors"):
         load_release(config)
+
+
+def test_a_release_records_its_weights_checksum(module, tmp_path):
+    weights, config = save_release(module, tmp_path / "model")
+    assert json.loads(config.read_text())["weights_sha256"] == sha256_of(weights)
+
+
+def test_a_clip_path_is_not_written_into_a_release(module, tmp_path):
+    module.hparams["text_encoder"] = {"name": "clip", "dim": 512, "path": "/home/me/clip"}
+    try:
+        _, config = save_release(module, tmp_path / "model")
+    finally:
+        module.hparams["text_encoder"] = None
+    assert json.loads(config.read_text())["hparams"]["text_encoder"] == {"name": "clip", "dim": 512}
+
+
+def test_nan_weights_are_not_released(module, tmp_path):
+    broken = copy.deepcopy(module)
+    with torch.no_grad():
+        next(broken.parameters()).view(-1)[0] = float("nan")
+    with pytest.raises(UsageError, match="NaN"):
+        save_release(broken, tmp_path / "model")
+    assert not (tmp_path / "model.json").exists()

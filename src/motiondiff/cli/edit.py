@@ -9,7 +9,7 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.atomic import save_npy, write_json
+from motiondiff.atomic import finite_or_null, save_npy, write_json
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps
 from motiondiff.cli.sample import cleanup_option, export_formats, slug
 from motiondiff.cli.validate import RULES_EDIT, check
@@ -136,7 +136,7 @@ def run(cfg: DictConfig) -> Path:
         "settings": {**result.settings, "clip_x0": module.clip_rule},
         "samples": rows,
     }  # fmt: skip
-    write_json(out / "results.json", summary)
+    write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
     for r in rows:
         extra = (f"max boundary ratio {r['max_boundary_ratio']:.2f}" if result.kind == "inbetween"
                  else f"root-relative kept error {r['root_relative_kept_max_error_m']:.1e} m")  # fmt: skip

@@ -20,7 +20,7 @@ import torch
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.atomic import save_npy, write_json
+from motiondiff.atomic import finite_or_null, save_npy, write_json
 from motiondiff.cli.common import (
     UsageError,
     apply_clip_x0,
@@ -193,7 +193,7 @@ def run(cfg: DictConfig) -> Path:
         with sampling_precision(module, precision):
             summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats,
                                        cleanup, body))  # fmt: skip
-        write_json(out / "results.json", summary)
+        write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
         print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
         return out
     results = []
@@ -207,7 +207,7 @@ def run(cfg: DictConfig) -> Path:
         results += save_samples(out, prompt, feats, module, formats, sigma, stem=stem, cleanup=cleanup,
                                 rig_names=cfg.get("bvh_names"), body=body)  # fmt: skip
     summary["samples"] = results
-    write_json(out / "results.json", summary)
+    write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
     print(f"\n{len(results)} sample(s) written to {out}")
     return out
 

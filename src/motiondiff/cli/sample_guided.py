@@ -13,7 +13,8 @@ import numpy as np
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.atomic import write_json
+from motiondiff.atomic import finite_or_null, write_json
+from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.cli.common import UsageError, find_checkpoint
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
 from motiondiff.hardware import resolve_device
@@ -45,12 +46,14 @@ def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, 
 
 def run(cfg: DictConfig) -> Path:
     from motiondiff.cli.sample import cleanup_option, export_formats, render_option, save_samples, smoothing_sigma
+    from motiondiff.cli.validate import RULES_SAMPLE, check
     from motiondiff.export.outputs import check_formats_for
     from motiondiff.lit.conditions import check_text
     from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
     from motiondiff.lit.loading import load_model
     from motiondiff.pipelines import GuidedMotionPipeline
 
+    check(cfg, RULES_SAMPLE)  # types, ranges and finite numbers before any work
     out = Path(HydraConfig.get().runtime.output_dir)
     check_num_samples(cfg.num_samples, SAMPLE_BATCH)  # the latent levels are sampled in one batch
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
@@ -61,7 +64,10 @@ def run(cfg: DictConfig) -> Path:
     if cfg.checkpoint in ("shipped", "latest", "best"):
         raise UsageError("method=guidedmotion needs checkpoint=<path to a train_latent.py checkpoint>")
     path = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
-    module = HierarchicalLatentModule.load_from_checkpoint(path, map_location=cfg.device, weights_only=True).eval()
+    with reading(path, "latent checkpoint", "give the .ckpt that train_latent.py wrote"):
+        module = HierarchicalLatentModule.load_from_checkpoint(path, map_location=cfg.device, weights_only=True)
+    check_finite_state(module.state_dict(), f"latent checkpoint {path}", "give the .ckpt that train_latent.py wrote")
+    module.eval()
     check_formats_for(formats, module.decoder.representation.skeleton, cfg.get("bvh_names"), body)
     if cfg.num_samples < 1:
         raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
@@ -100,6 +106,6 @@ def run(cfg: DictConfig) -> Path:
         "local_actions": result.info["local_actions"],
         "samples": rows,
     }  # fmt: skip
-    write_json(out / "results.json", summary)
+    write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
     print(f"\n{len(rows)} GuidedMotion sample(s) of {text!r} written to {out}")
     return out

@@ -70,9 +70,9 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
     """Start from the weights of a checkpoint or release (a fine-tune), not a resume: optimizer and step start anew.
 
     The architecture must match, except for parameters this run adds (``NEW_IN_FINE_TUNE``)."""
-    import torch
     from safetensors.torch import load_file
 
+    from motiondiff.checked_loading import check_finite_state, reading, torch_load
     from motiondiff.release import release_paths
 
     path = Path(source)
@@ -81,9 +81,11 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
     if not path.is_file():
         raise UsageError(f"init_from={source} not found; give a .ckpt of a run or a release (.safetensors)")
     if path.suffix == ".safetensors":
-        state = load_file(str(path))
+        with reading(path, "init_from weights"):
+            state = load_file(str(path))
     else:
-        state = torch.load(path, map_location="cpu", weights_only=True)["state_dict"]
+        state = _state_dict(torch_load(path, "init_from checkpoint"), path)
+    check_finite_state(state, f"init_from={source}")
     own = module.state_dict()
     shapes = [k for k in state if k in own and state[k].shape != own[k].shape]
     missing = [k for k in own if k not in state and not k.startswith(NEW_IN_FINE_TUNE)]
@@ -95,6 +97,41 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
         )
     module.load_state_dict(state, strict=False)
     log.info("initialised from %s (%d tensors)", source, len(state))
+
+
+# What Lightning's resume reads besides the weights (a checkpoint without them is weights only: init_from=).
+LIGHTNING_KEYS = ("pytorch-lightning_version", "epoch", "global_step", "optimizer_states", "loops")
+
+
+def _state_dict(checkpoint: dict, path: Path) -> dict:
+    from motiondiff.checked_loading import CKPT_FIX
+
+    state = checkpoint.get("state_dict")
+    if not isinstance(state, dict):
+        raise UsageError(f"{path} has no state_dict: it is not a Lightning checkpoint; {CKPT_FIX}")
+    return state
+
+
+def check_resume(ckpt: str, module: MotionDiffusionModule, batch_size: int) -> None:
+    """A checkpoint to resume must be readable, finite, of this run's batch size and this architecture: one line
+    before training starts, not a traceback from inside Lightning's restore."""
+    from motiondiff.checked_loading import check_finite_state, check_same_shapes, torch_load
+    from motiondiff.lit.resume import KEY
+
+    path = Path(ckpt)
+    checkpoint = torch_load(path, f"ckpt_path={ckpt}: the checkpoint")
+    state = _state_dict(checkpoint, path)
+    lacking = [k for k in LIGHTNING_KEYS if k not in checkpoint]
+    if lacking:
+        raise UsageError(f"ckpt_path={ckpt} is not a training checkpoint to resume (it has no {lacking[0]!r}): "
+                         "resume from a run's last.ckpt, or start from its weights with init_from=")  # fmt: skip
+    saved = checkpoint.get(KEY) if isinstance(checkpoint.get(KEY), dict) else {}
+    if "batch_size" in saved and saved["batch_size"] != batch_size:
+        raise UsageError(f"ckpt_path={ckpt} was trained with batch_size={saved['batch_size']}: resume with the same "
+                         f"batch_size (got {batch_size}) or use init_from= to fine-tune")  # fmt: skip
+    check_finite_state(state, f"ckpt_path={ckpt}")
+    fix = "resume with the settings of its run (its .hydra/overrides.yaml), or start anew with init_from="
+    check_same_shapes(state, module.state_dict(), f"ckpt_path={ckpt}", fix, "this run's model (another architecture)")
 
 
 def evaluation_callbacks(callbacks: list) -> list:
@@ -135,9 +172,13 @@ def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_TRAIN)  # types and ranges before any work
     L.seed_everything(cfg.seed, workers=True)
     out = Path(HydraConfig.get().runtime.output_dir)
+    if cfg.ckpt_path is not None and not Path(cfg.ckpt_path).is_file():
+        raise UsageError(f"ckpt_path={cfg.ckpt_path} not found; pass the last.ckpt of the run to resume")
     dm: MotionDataModule = instantiate(cfg.dataset.datamodule)
     dm.setup("fit")
     module = build_module(cfg, dm)
+    if cfg.ckpt_path is not None:  # before the text table and the trainer: a wrong checkpoint fails at once
+        check_resume(cfg.ckpt_path, module, int(cfg.batch_size))
     if cfg.get("init_from"):  # before the text table: the centring of caption features comes with the weights
         init_weights(module, cfg.init_from)
     if cfg.condition.kind == "text":
@@ -159,8 +200,6 @@ def run(cfg: DictConfig) -> Path:
     n_params = sum(p.numel() for p in module.denoiser.parameters() if p.requires_grad)
     log.info("denoiser: %.2f M trainable parameters; outputs in %s", n_params / 1e6, out)
     ckpt = cfg.ckpt_path
-    if ckpt is not None and not Path(ckpt).is_file():
-        raise UsageError(f"ckpt_path={ckpt} not found; pass the last.ckpt of the run to resume")
     if trainer.is_global_zero:  # before the first step: even a killed run says what it was
         update_run_json(out, provenance=provenance(cfg))
     start = time.perf_counter()

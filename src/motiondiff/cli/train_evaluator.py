@@ -130,6 +130,9 @@ def _overrides(cfg: DictConfig) -> list[str]:
 
 
 def run(cfg: DictConfig) -> Path:
+    from motiondiff.cli.validate import check_finite
+
+    check_finite(cfg)  # a NaN or infinite setting fails before any work
     L.seed_everything(cfg.seed, workers=True)
     dm: MotionDataModule = instantiate(cfg.dataset.datamodule)
     dm.setup(None)

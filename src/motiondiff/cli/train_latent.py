@@ -13,6 +13,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
+from motiondiff.checked_loading import reading
 from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict, trainer_parts
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
@@ -32,7 +33,8 @@ def load_vaes(paths: dict) -> dict[str, MotionVAEModule]:
         if not path.is_file():
             raise UsageError(f"vae.{level}={path} not found; train it with `python train_vae.py level={level}` on the "
                              "same dataset and pass its best-mpjpe checkpoint")  # fmt: skip
-        vaes[level] = MotionVAEModule.load_from_checkpoint(path, map_location="cpu", weights_only=True)
+        with reading(path, f"vae.{level} checkpoint", "pass the best-mpjpe checkpoint train_vae.py wrote"):
+            vaes[level] = MotionVAEModule.load_from_checkpoint(path, map_location="cpu", weights_only=True)
     return vaes
 
 

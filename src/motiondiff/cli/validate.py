@@ -3,7 +3,8 @@ the allowed range, not deep inside PyTorch after files were written.
 
 Hydra's structured configs (dataclasses in a ConfigStore) would type every key, but these configs are mostly open
 groups (any backbone or dataset brings its own keys); a rule table over the keys every run shares checks types and
-ranges in one place, and the entry points call `check(cfg, RULES_...)` first.
+ranges in one place, and the entry points call `check(cfg, RULES_...)` first. Every number of a config, ruled or
+not, must be finite: ``guidance=nan`` would otherwise sample NaN motions and write them.
 """
 
 from __future__ import annotations
@@ -109,8 +110,33 @@ RULES_EVALUATE = {
 }  # fmt: skip
 
 
+def non_finite(value, key: str = ""):
+    """(key, value) of the first NaN or infinite float in a plain config tree, None when every number is finite."""
+    from motiondiff.scripting import USER_TEXT_KEYS  # here: scripting is the commands' module, not the rules'
+
+    if isinstance(value, float) and not math.isfinite(value):
+        return key, value
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
+    for k, v in items:
+        if not key and k in USER_TEXT_KEYS:  # user text is data (text=nan is the text "nan", checked as text)
+            continue
+        found = non_finite(v, f"{key}[{k}]" if isinstance(k, int) else f"{key}.{k}" if key else str(k))
+        if found is not None:
+            return found
+    return None
+
+
+def check_finite(cfg: DictConfig) -> None:
+    """Raise UsageError naming the first setting that is NaN or infinite (read unresolved: nothing is evaluated)."""
+    found = non_finite(OmegaConf.to_container(cfg, resolve=False))
+    if found is not None:
+        key, value = found
+        raise UsageError(f"{key}={value}: must be a finite number (not nan or inf); fix it with {key}=<number>")
+
+
 def check(cfg: DictConfig, rules: dict[str, Rule]) -> None:
-    """Raise UsageError naming the first key whose value breaks its rule (keys a config lacks are skipped)."""
+    """Raise UsageError naming the first key whose value breaks its rule (keys a config lacks are skipped), or the
+    first number anywhere in the config that is NaN or infinite."""
     for key, rule in rules.items():
         if OmegaConf.select(cfg, key, default="__missing__", throw_on_missing=False) == "__missing__":
             continue
@@ -125,3 +151,4 @@ def check(cfg: DictConfig, rules: dict[str, Rule]) -> None:
     if isinstance(d_model, int) and isinstance(heads, int) and d_model % heads:
         raise UsageError(f"model.num_heads={heads} must divide model.d_model={d_model} (each head gets d_model/heads "
                          "dims); e.g. model.num_heads=4")  # fmt: skip
+    check_finite(cfg)

@@ -26,6 +26,7 @@ from motiondiff.edit.inputs import InputMotion
 from motiondiff.edit.masks import EditError, frame_keep, part_keep, resolve_joints, to_frames
 from motiondiff.edit.trajectory import close_root_path, needs_root_closure
 from motiondiff.lit.conditions import check_action
+from motiondiff.lit.generation import check_finite_output
 from motiondiff.skeleton import Skeleton
 
 
@@ -134,6 +135,7 @@ def _inpaint_batch(module, motions, keeps, conds, order, options, generator, pro
         module, cond, known, keep, lengths, generator=generator, progress=progress, **options.inpaint_kwargs()
     )
     feats = module.denormalise(out).float().cpu().numpy()
+    check_finite_output(feats, "the edited motion")
     # the kept part is the input's own numbers (not normalised and back, which rounds in float32)
     return [np.where(keeps[m], knowns[m], feats[k, : lengths[k]]) for k, m in enumerate(order)]
 

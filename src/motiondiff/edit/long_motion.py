@@ -39,6 +39,7 @@ import torch
 
 from motiondiff.edit.canonical import from_canonical, placement, to_canonical
 from motiondiff.edit.inpaint import SamplingOptions, inpaint
+from motiondiff.lit.generation import check_finite_output
 
 
 @dataclass(frozen=True)
@@ -177,11 +178,13 @@ def generate_long(
             window = Window(plan, _denormalise(out, mean, std), np.zeros(num_samples), np.zeros((num_samples, 3)))
         else:
             window = _continue(module, motion, plan, cond, mean, std, generator=generator, **held_kwargs)
+        check_finite_output(window.features, "the long motion")  # at once: the next window continues from it
         windows.append(window)
         placed = from_canonical(rep, window.features, window.yaw, window.offset)
         # the blended frames replace the motion's last ones (hml: rows before them decode unchanged)
         motion = np.concatenate([motion[:, : plan.start - plan.blend], placed[:, plan.held :]], axis=1)
 
+    check_finite_output(motion, "the long motion")
     joints = rep.decode_numpy(motion)
     spans = [{"label": labels[k], "seconds": float(s), "start": int(sum(frames[:k])), "end": int(sum(frames[: k + 1]))}
              for k, (_, s) in enumerate(segments)]  # fmt: skip

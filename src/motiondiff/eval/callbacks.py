@@ -11,6 +11,9 @@ motiondiff.eval.sample_videos).
 A `ModelCheckpoint(monitor="val/fid", mode="min", save_top_k=1)` placed after it keeps the best-FID checkpoint
 (`callbacks.best_fid.monitor=val/action_accuracy callbacks.best_fid.mode=max` keeps the best action accuracy).
 
+Weights that generate NaN or infinite motion (a diverged run) are logged as the worst scores (`val/fid=inf`, zero
+accuracies) rather than stopping the training, so the best-FID checkpoint never picks them.
+
 Place it before `EMAWeightAveraging` in the callback list: that callback swaps the averaged weights back out in
 its own `on_validation_epoch_end`, and the evaluation should see the averaged weights the model is sampled with.
 """
@@ -27,6 +30,7 @@ import torch
 
 from motiondiff.eval.protocol import EvalClips, Evaluators, action_accuracy, generate, replication_metrics
 from motiondiff.eval.sample_videos import SampleVideos
+from motiondiff.lit.generation import NonFiniteOutput
 
 log = logging.getLogger(__name__)
 
@@ -87,12 +91,38 @@ class GenerationEvaluation(L.Callback):
         if (trainer.current_epoch + 1) % self.every_n_epochs:
             return
         start = time.perf_counter()
+        was_training = pl_module.training
+        try:
+            values = self._metrics(trainer, pl_module)
+        except NonFiniteOutput:
+            values = self.worst_scores(pl_module.condition_kind)
+            log.warning("evaluation at step %d: the model generated NaN or infinite motion; logged val/fid=inf",
+                        trainer.global_step)  # fmt: skip
+        pl_module.train(was_training)
+        for name, value in values.items():
+            pl_module.log(f"val/{name}", float(value), prog_bar=name == "fid", sync_dist=True)
+        log.info("evaluation at step %d (%.1f s): %s", trainer.global_step, time.perf_counter() - start,
+                 ", ".join(f"{k} {v:.3f}" for k, v in values.items()))  # fmt: skip
+
+    def worst_scores(self, kind: str) -> dict[str, float]:
+        """What a model that generates no finite motion scores: the worst FID and distances, zero accuracies."""
+        worst = {"fid": float("inf")}
+        if kind == "text":
+            worst.update({f"r_precision_top{k}": 0.0 for k in (1, 2, 3)}, mm_dist=float("inf"))
+            if self.action_accuracy:
+                worst["action_accuracy"] = 0.0
+        elif kind == "action":
+            worst["accuracy"] = 0.0
+        else:
+            worst.update(kid=float("inf"), precision=0.0, recall=0.0)
+        return worst
+
+    def _metrics(self, trainer: L.Trainer, pl_module) -> dict:
         clips, real, captions = self._real_set(trainer, pl_module)
         kind = pl_module.condition_kind
         conditions = {"text": captions, "action": list(clips.actions)}.get(kind, [None] * len(clips))
         guidance = pl_module.default_guidance if self.guidance is None else self.guidance
         generator = torch.Generator(device=pl_module.device).manual_seed(self.seed)
-        was_training = pl_module.training
         feats = generate(pl_module, conditions, clips.lengths, self.batch_size, generator,
                          guidance=guidance, **self.sampling)  # fmt: skip
         gen = self.evaluators.embed_motion(feats)
@@ -108,8 +138,4 @@ class GenerationEvaluation(L.Callback):
                                                         clips.actions)  # fmt: skip
         if self.videos is not None and trainer.is_global_zero:  # rank 0 logs; the others have no loggers to fill
             self.videos.log(trainer, pl_module, guidance, self.sampling["precision"])
-        pl_module.train(was_training)
-        for name, value in values.items():
-            pl_module.log(f"val/{name}", float(value), prog_bar=name == "fid", sync_dist=True)
-        log.info("evaluation at step %d (%.1f s): %s", trainer.global_step, time.perf_counter() - start,
-                 ", ".join(f"{k} {v:.3f}" for k, v in values.items()))  # fmt: skip
+        return values

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
+from motiondiff.atomic import atomic_write, finite_or_null
 
 Summary = dict[str, tuple[float, float, int]]
 
@@ -196,7 +196,7 @@ def write_summary_json(path: str | Path, guidance: float, summary: Summary, extr
     for key, value in (extra or {}).items():
         if key in data:
             raise ValueError(f"extra key {key!r} would overwrite the schema's own field")
-        data[key] = value
+        data[key] = finite_or_null(value)  # e.g. a replication's undefined distance: null, never a bare NaN
     text = json.dumps(data, indent=2, allow_nan=False, ensure_ascii=False) + "\n"  # strict JSON: no NaN tokens
     return atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 

@@ -4,11 +4,14 @@ are read from the module's prepared table without an encoder."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import torch
 
 from motiondiff.errors import UsageError
 
+CLIP_PATH_ENV = "MOTIONDIFF_CLIP_PATH"  # the local CLIP folder of a model whose config names CLIP without one
 MAX_TEXT_CHARS = 1000  # far beyond any caption the encoders were trained on (CLIP keeps 77 tokens)
 
 
@@ -54,8 +57,16 @@ def generation_frames(module, seconds=None, *, frames: int | None = None, name: 
 
 
 def text_encoder_kwargs(cfg_text) -> dict:
-    """Arguments of `build_text_encoder` from a text_encoder config (its `dim` is informational)."""
-    return {k: v for k, v in _plain(cfg_text).items() if k != "dim"}
+    """Arguments of `build_text_encoder` from a text_encoder config (its `dim` is informational). A release names
+    CLIP without its folder (a path in a downloaded file is never followed): that comes from $MOTIONDIFF_CLIP_PATH."""
+    kwargs = {k: v for k, v in _plain(cfg_text).items() if k != "dim"}
+    if kwargs.get("name") == "clip" and not kwargs.get("path"):
+        path = os.environ.get(CLIP_PATH_ENV)
+        if not path:
+            raise UsageError(f"this model encodes text with CLIP, whose weights are not shipped: set {CLIP_PATH_ENV}="
+                             "<your local clip-vit-base-patch32 folder (transformers save_pretrained)>")  # fmt: skip
+        kwargs["path"] = path
+    return kwargs
 
 
 def _plain(cfg) -> dict:

@@ -2,7 +2,8 @@
 
 Every caller that makes motion from prompts, actions or nothing (the pipelines, sample.py, the evaluation protocol,
 the behaviour report) goes through `generate_features`; editing adds its known frames through `module.sample` and
-GuidedMotion samples its own latent levels.
+GuidedMotion samples its own latent levels. Every one of them checks its output with `check_finite_output` before
+anything is written: a NaN motion is one error line, never a file of NaNs.
 """
 
 from __future__ import annotations
@@ -25,6 +26,23 @@ def check_num_samples(value, limit: int = MAX_NUM_SAMPLES) -> int:
         raise UsageError(f"num_samples={value!r}: must be a whole number from 1 to {limit} (motions are sampled "
                          f"{SAMPLE_BATCH} at a time); for more, run again with another seed=")  # fmt: skip
     return value
+
+
+class NonFiniteOutput(UsageError):
+    """The model generated NaN or infinite numbers (broken weights or extreme settings); nothing is written."""
+
+
+def check_finite_output(values, what: str = "the generated motion") -> None:
+    """Raise NonFiniteOutput when ``values`` (a tensor, an array or a list of them) hold a NaN or an infinity."""
+    items = values if isinstance(values, list | tuple) else [values]
+    bad = total = 0
+    for v in items:
+        v = v.detach().float().cpu().numpy() if isinstance(v, torch.Tensor) else np.asarray(v, dtype=np.float64)
+        bad, total = bad + int((~np.isfinite(v)).sum()), total + v.size
+    if bad:
+        raise NonFiniteOutput(f"{what} holds {bad} NaN or infinite value(s) of {total}, so nothing was written: the "
+                              "model's weights are broken or the settings extreme; use another checkpoint (e.g. "
+                              "checkpoint=shipped) or a lower guidance=")  # fmt: skip
 
 
 def fitted_steps(module, steps, default: int | None) -> int | None:
@@ -83,6 +101,7 @@ def generate_features(
         with sampling_precision(module, precision):
             feats = module.sample(cond, lens, generator=generator, **sampling)
         feats = module.denormalise(feats.float()).cpu().numpy()
+        check_finite_output(feats)
         for row, i in enumerate(idx):
             results[i] = feats[row, : int(lengths[i])]
         if bar is not None:

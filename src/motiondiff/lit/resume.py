@@ -16,6 +16,8 @@ import lightning as L
 import numpy as np
 import torch
 
+from motiondiff.errors import UsageError
+
 KEY = "motiondiff_resume"
 
 
@@ -52,7 +54,7 @@ class ExactResume(L.Callback):
         if saved is None:  # a checkpoint from before exact resumes: Lightning's own resume
             return
         if saved["batch_size"] != trainer.datamodule.batch_size:
-            raise ValueError(f"the checkpoint was trained with batch_size={saved['batch_size']}: resume with the same "
+            raise UsageError(f"the checkpoint was trained with batch_size={saved['batch_size']}: resume with the same "
                              f"batch_size (got {trainer.datamodule.batch_size}) or use init_from= to fine-tune")  # fmt: skip
         trainer.datamodule.resume_position = (saved["epoch"], saved["batches_done"] * saved["batch_size"])
         self._pending = saved["random_state"]

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.errors import UsageError
 from motiondiff.guided.local_actions import (
     LocalActionError,
@@ -25,7 +26,7 @@ from motiondiff.guided.local_actions import (
     local_descriptions,
 )
 from motiondiff.lit.conditions import text_encoder_kwargs
-from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
+from motiondiff.lit.generation import SAMPLE_BATCH, check_finite_output, check_num_samples
 from motiondiff.lit.latent import LATENT_SAMPLERS, HierarchicalLatentModule
 from motiondiff.lit.loading import load_model
 from motiondiff.models.hierarchical import LEVELS
@@ -58,7 +59,11 @@ class GuidedMotionPipeline:
         path = Path(path)
         if not path.is_file():
             raise UsageError(f"no latent model at {path}: give the .ckpt that train_latent.py wrote")
-        latent = HierarchicalLatentModule.load_from_checkpoint(path, map_location=device, weights_only=True)
+        with reading(path, "latent checkpoint", "give the .ckpt that train_latent.py wrote"):
+            latent = HierarchicalLatentModule.load_from_checkpoint(path, map_location=device, weights_only=True)
+        check_finite_state(
+            latent.state_dict(), f"latent checkpoint {path}", "give the .ckpt that train_latent.py wrote"
+        )
         mdm = None if local_model is None else load_model(resolve_model(local_model), device)
         return cls(latent, mdm, str(path))
 
@@ -111,6 +116,7 @@ class GuidedMotionPipeline:
         except LocalActionError as err:
             raise UsageError(str(err)) from None
         feats = [f for f in self.latent.denormalise(feats).cpu().numpy()]
+        check_finite_output(feats, "the GuidedMotion motion")
         rep = self.latent.decoder.representation
         joints = [rep.decode_numpy(f).astype(np.float32) for f in feats]
         weights = [1.0] * len(local.texts) if local_weights is None else [float(w) for w in local_weights]

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import save_npy, write_json
+from motiondiff.atomic import finite_or_null, save_npy, write_json
 from motiondiff.data.representations import Representation
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
@@ -70,7 +70,7 @@ class MotionOutput:
                                       joints=self._changed(i), rig_names=rig_names, body=body)  # fmt: skip
             rows.append({"prompt": prompt, "index": i, "frames": len(joints), "joints": f"{stem}_joints.npy",
                          "features": f"{stem}_features.npy", "exports": exports})  # fmt: skip
-        write_json(folder / "results.json", {"info": self.info, "samples": rows}, default=str)
+        write_json(folder / "results.json", finite_or_null({"info": self.info, "samples": rows}), default=str)
         return rows
 
     def cleaned(self, *cleanups: str) -> MotionOutput:

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.eval import action_table, report
 from motiondiff.paths import REPO_DIR
 
@@ -114,7 +115,7 @@ def main(argv: list[str]) -> None:
              "clips = generated motions per action; the real column is empty (descriptions have no real clip)"]  # fmt: skip
     text = action_table.format_per_action(rows, "Action accuracy on held-out descriptions", notes)
     report.write_markdown(out / "paraphrases.md", text)
-    (out / "paraphrases.json").write_text(json.dumps({"accuracy": accuracy, "rows": rows, **result}, indent=1))
+    write_json(out / "paraphrases.json", finite_or_null({"accuracy": accuracy, "rows": rows, **result}))
     action_table.plot_confusion(action_table.confusion(result["asked"], result["predicted"], len(names)), names,
                                 out / "paraphrases_confusion.png", "held-out descriptions: asked vs classified")  # fmt: skip
     print(text)

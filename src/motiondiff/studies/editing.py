@@ -24,7 +24,6 @@ The measurement functions are shared with ``edit.py`` (its results.json).
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
@@ -33,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.edit.smoothing import smoothness_of_joints
 
 SPEED_FLOOR = 0.1  # m/s: the least "median generated speed" a boundary jump is divided by
@@ -379,7 +379,7 @@ def main(argv: list[str]) -> Path:
     report["checkpoint"] = str(ckpt)
     text = format_report(report, str(ckpt))
     (out / "report.md").write_text(text)
-    (out / "report.json").write_text(json.dumps(report, indent=1))
+    write_json(out / "report.json", finite_or_null(report))
     print(text)
     print(f"report written to {out}")
     return out

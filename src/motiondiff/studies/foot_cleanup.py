@@ -12,12 +12,12 @@ level a clean motion has. Writes README.md and numbers.json to `out` (docs/resul
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.edit.foot_cleanup import clean_foot_skate, foot_sliding
 from motiondiff.skeleton import Skeleton
 
@@ -129,7 +129,7 @@ def main(argv: list[str] | None = None) -> None:
     command = " ".join(["python -m motiondiff.studies.foot_cleanup", *argv])
     text = table(results, command)
     write_markdown(out / "README.md", text)
-    write_markdown(out / "numbers.json", json.dumps(results, indent=1))
+    write_json(out / "numbers.json", finite_or_null(results))
     print(text + f"\nwritten to {out}")
 
 

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.bench.timing import median_seconds as timed_median
 from motiondiff.errors import UsageError
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
@@ -171,7 +172,7 @@ def write_timing(out: Path, times: dict, meta: dict) -> None:
     lines = ["# GuidedMotion vs MDM: sampling time per motion", "", f"Latent model `{meta['latent']}`; MDM `{meta['mdm']}`.",
              "", *timing_lines(times, meta), f"Command: `{meta['command']}`", ""]  # fmt: skip
     write_markdown(out.with_suffix(".md"), "\n".join(lines))
-    out.with_suffix(".json").write_text(json.dumps({**meta, "times": times}, indent=1))
+    write_json(out.with_suffix(".json"), finite_or_null({**meta, "times": times}))
 
 
 def write(out: Path, rows: dict, times: dict, meta: dict) -> None:
@@ -199,7 +200,7 @@ def write(out: Path, rows: dict, times: dict, meta: dict) -> None:
     write_markdown(out.with_suffix(".md"), "\n".join(lines))
     payload = {**meta, "times": times, "summaries": {k: {m: list(v) for m, v in s.items()} for k, s in summaries.items()},
                "replications_raw": rows}  # fmt: skip
-    out.with_suffix(".json").write_text(json.dumps(payload, indent=1))
+    write_json(out.with_suffix(".json"), finite_or_null(payload))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -19,6 +19,7 @@ import json
 import sys
 from pathlib import Path
 
+from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.errors import UsageError
 from motiondiff.paths import REPO_DIR
 
@@ -85,8 +86,8 @@ def write(out: Path, rows: list[dict], chosen: dict, tolerance: float, times: di
         rule += f" and action accuracy within {margin:g} of the best sampler's"
     lines += ["", f"Chosen: **{chosen['label']}**, {rule}.", ""]
     out.with_suffix(".md").write_text("\n".join(lines))
-    out.with_suffix(".json").write_text(json.dumps({"rows": rows, "chosen": chosen["label"], "tolerance": tolerance,
-                                                    "seconds": times}, indent=1))  # fmt: skip
+    write_json(out.with_suffix(".json"), finite_or_null({"rows": rows, "chosen": chosen["label"],
+                                                         "tolerance": tolerance, "seconds": times}))  # fmt: skip
     fig, ax = plt.subplots(figsize=(5, 3.5))
     for name in dict.fromkeys(r["sampler"] for r in rows):
         part = sorted((r for r in rows if r["sampler"] == name), key=lambda r: r["steps"])

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.errors import UsageError
 from motiondiff.eval.report import mean_ci
 from motiondiff.lit.conditions import text_encoder_kwargs
@@ -102,7 +103,7 @@ def write(out: Path, meta: dict, results: list[dict], summary: dict) -> None:
     import matplotlib.pyplot as plt
 
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(json.dumps({**meta, **summary, "captions": results}, indent=1))
+    write_json(out.with_suffix(".json"), finite_or_null({**meta, **summary, "captions": results}))
     lines = [f"# GuidedMotion weight control ({len(results)} captions)", "",
              f"Checkpoint: `{meta['checkpoint']}`; local actions by `{meta['local_model']}`; level steps {meta['level_steps']}; "
              f"{meta['samples']} samples per caption and weight; rho {meta['rho']:g}; decoded from the {meta['final_level']} "

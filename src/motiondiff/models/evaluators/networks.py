@@ -24,7 +24,7 @@ from safetensors.torch import load_file, save_file
 from torch import nn
 from torch.nn.utils.rnn import pack_padded_sequence
 
-from motiondiff.atomic import atomic_write
+from motiondiff.atomic import atomic_write, write_json
 from motiondiff.data.representations.hml_features import feature_slices, joints_from_features, recover_root
 from motiondiff.text.word_vectors import POS_CATEGORIES, Vocabulary, load_glove, sequence, tag_captions
 
@@ -295,7 +295,7 @@ def save_released(model: nn.Module, path: str | Path, meta: dict | None = None) 
     state = {k: v.detach().contiguous().cpu() for k, v in model.state_dict().items()}
     atomic_write(path.with_suffix(".safetensors"), lambda tmp: save_file(state, tmp))
     doc = {"kind": kind, "config": config, "meta": meta or {}}
-    atomic_write(path.with_suffix(".json"), lambda tmp: Path(tmp).write_text(json.dumps(doc, indent=1)))
+    write_json(path.with_suffix(".json"), doc)
     return path.with_suffix(".safetensors")
 
 

@@ -1,0 +1,195 @@
+"""What a release's JSON must hold before a model is built from it, and its weights file's checksum.
+
+A release is read from a file a user downloaded or edited: its JSON is checked against a schema (keys, types, shapes
+of the normalisation and action lists) so a bad file is one clear line, never a traceback from deep inside a
+constructor. Its text encoder is a known encoder's name, never a path the file could point anywhere.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import json
+import math
+import re
+from pathlib import Path
+
+from motiondiff.errors import UsageError
+
+FORMAT = "motiondiff-release-1"
+TOP_KEYS = {"format", "class", "hparams", "provenance", "weights_sha256"}
+CONDITION_KINDS = ("text", "action", "none")
+ENCODER_KEYS = {"name", "dim", "max_length"}  # never "path": a release names its encoder, the user's config finds it
+MAX_CONFIG_BYTES = 10 << 20  # a release JSON is kilobytes (hyper-parameters, statistics, provenance)
+RESTORE = "restore the release (`git checkout -- checkpoints` for a shipped one) or release the checkpoint again"
+
+
+def sha256_of(path: str | Path) -> str:
+    """Hex SHA-256 of a file, read in 1 MiB blocks."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def read_release_json(config: Path) -> dict:
+    """The parsed JSON of a release, or one UsageError for a file that is not JSON (or far too big to be one)."""
+    size = config.stat().st_size
+    if size > MAX_CONFIG_BYTES:
+        raise UsageError(f"release config {config} has {size} bytes, more than a release's JSON ever needs "
+                         f"({MAX_CONFIG_BYTES >> 20} MiB); {RESTORE}")  # fmt: skip
+    try:
+        meta = json.loads(config.read_bytes().decode("utf-8"), parse_constant=_no_constant)
+    except (UnicodeDecodeError, json.JSONDecodeError, ValueError, RecursionError) as err:
+        raise UsageError(f"release config {config} is not valid JSON ({_short(err)}); {RESTORE}") from None
+    if not isinstance(meta, dict):
+        raise UsageError(f"release config {config} holds {type(meta).__name__}, not a JSON object; {RESTORE}")
+    return meta
+
+
+def _no_constant(name: str):
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def check_weights_checksum(weights: Path, config: Path, expected: str) -> None:
+    """Refuse a weights file whose SHA-256 differs from the one its JSON records (one flipped bit is enough)."""
+    actual = sha256_of(weights)
+    if actual != expected:
+        raise UsageError(f"release weights {weights} do not match the weights_sha256 in {config.name} (sha256 "
+                         f"{actual[:12]}..., expected {expected[:12]}...): the file is corrupt or changed; {RESTORE}")  # fmt: skip
+
+
+def check_release_meta(meta: dict, config: Path) -> None:
+    """Raise UsageError naming the first key of a release JSON that breaks the schema."""
+    where = f"release config {config}"
+    if meta.get("format") != FORMAT:
+        raise UsageError(f"{where} is not a motiondiff release (format {_shown(meta.get('format'))}, expected "
+                         f"{FORMAT}): give the .safetensors of a release made by motiondiff.release")  # fmt: skip
+    unknown = sorted(set(meta) - TOP_KEYS)
+    missing = sorted(TOP_KEYS - set(meta))
+    if unknown or missing:
+        raise UsageError(f"{where}: {_keys_problem(unknown, missing, TOP_KEYS)}; {RESTORE}")
+    if meta["class"] != "MotionDiffusionModule":
+        raise UsageError(f"{where}: class {meta['class']!r} is not MotionDiffusionModule; {RESTORE}")
+    digest = meta["weights_sha256"]
+    if not isinstance(digest, str) or not re.fullmatch(r"[0-9a-f]{64}", digest):
+        raise UsageError(f"{where}: weights_sha256 must be 64 lowercase hex digits, got {digest!r}; {RESTORE}")
+    if not isinstance(meta["provenance"], dict):
+        raise UsageError(f"{where}: provenance must be an object; {RESTORE}")
+    hparams = meta["hparams"]
+    if not isinstance(hparams, dict):
+        raise UsageError(f"{where}: hparams must be an object; {RESTORE}")
+    _check_hparams(hparams, where)
+
+
+def _keys_problem(unknown: list, missing: list, allowed) -> str:
+    parts = [f"unknown key {unknown[0]!r}"] if unknown else []
+    parts += [f"missing key {missing[0]!r}"] if missing else []
+    return ", ".join(parts) + f" (keys: {', '.join(sorted(allowed))})"
+
+
+def _module_parameters() -> tuple[set, set]:
+    """(every, required) hyper-parameter name of MotionDiffusionModule."""
+    from motiondiff.lit.diffusion import MotionDiffusionModule
+
+    params = list(inspect.signature(MotionDiffusionModule.__init__).parameters.values())[1:]
+    return {p.name for p in params}, {p.name for p in params if p.default is inspect.Parameter.empty}
+
+
+def _check_hparams(h: dict, where: str) -> None:
+    every, required = _module_parameters()
+    unknown, missing = sorted(set(h) - every), sorted(required - set(h))
+    if unknown or missing:
+        raise UsageError(f"{where}: hparams has {_keys_problem(unknown, missing, every)}; {RESTORE}")
+
+    def fail(key: str, want: str):
+        raise UsageError(f"{where}: hparams.{key}={_shown(_get(h, key))} must be {want}; {RESTORE}")
+
+    for key in ("feature_dim", "max_frames", "num_joints", "model.d_model", "model.num_layers", "model.num_heads",
+                "model.ff_size", "diffusion.steps"):  # fmt: skip
+        if not _is_int(_get(h, key)) or _get(h, key) < 1:
+            fail(key, "an integer >= 1")
+    for key in ("model", "backbone", "condition", "diffusion", "optim"):
+        if not isinstance(h[key], dict):
+            fail(key, "an object")
+    for key in ("representation", "loss", "known_conditioning"):
+        if h.get(key) is not None and not isinstance(h[key], dict):
+            fail(key, "an object or null")
+    if h["model"]["d_model"] % h["model"]["num_heads"]:
+        fail("model.num_heads", f"a divisor of model.d_model={h['model']['d_model']}")
+    for key in ("backbone.name", "diffusion.prediction", "diffusion.schedule"):
+        if not isinstance(_get(h, key), str) or not _get(h, key):
+            fail(key, "a non-empty string")
+    if not isinstance(h.get("dataset", ""), str):
+        fail("dataset", "a string")
+    if not _is_number(h["fps"]) or not h["fps"] > 0:
+        fail("fps", "a finite number > 0")
+    dim = h["feature_dim"]
+    for key in ("mean", "std"):
+        if not _numbers(h[key], dim):
+            fail(key, f"a list of {dim} finite numbers (feature_dim)")
+    if not all(s > 0 for s in h["std"]):
+        fail("std", "positive everywhere")
+    x0 = h.get("x0_range")
+    if x0 is not None and not (isinstance(x0, list) and len(x0) == 2 and all(_numbers(r, dim) for r in x0)):
+        fail("x0_range", f"null or two lists of {dim} finite numbers")
+    kind = _get(h, "condition.kind")
+    if kind not in CONDITION_KINDS:
+        fail("condition.kind", "one of " + ", ".join(CONDITION_KINDS))
+    names = h.get("action_names")
+    if names is not None and not (isinstance(names, list) and all(isinstance(n, str) and n for n in names)):
+        fail("action_names", "null or a list of names")
+    if kind == "action" and not names:
+        fail("action_names", "a non-empty list of names for an action model")
+    _check_text_encoder(h.get("text_encoder"), kind, where)
+
+
+def _check_text_encoder(encoder, kind: str, where: str) -> None:
+    from motiondiff.text.encoders import TEXT_ENCODERS
+
+    if encoder is None:
+        if kind == "text":
+            raise UsageError(f"{where}: a text model's hparams.text_encoder must name its encoder; {RESTORE}")
+        return
+    if not isinstance(encoder, dict):
+        raise UsageError(f"{where}: hparams.text_encoder must be an object or null; {RESTORE}")
+    extra = sorted(set(encoder) - ENCODER_KEYS)
+    if extra:
+        raise UsageError(f"{where}: hparams.text_encoder.{extra[0]} is not allowed (a release names its encoder "
+                         f"with name, dim and max_length only, never a path); {RESTORE}")  # fmt: skip
+    name = encoder.get("name")
+    if name not in TEXT_ENCODERS:
+        raise UsageError(f"{where}: hparams.text_encoder.name={_shown(name)} is not a known text encoder (one of "
+                         f"{', '.join(TEXT_ENCODERS)}; a release names its encoder, never a path); {RESTORE}")  # fmt: skip
+    if not _is_int(encoder.get("dim")) or encoder["dim"] < 1:
+        raise UsageError(f"{where}: hparams.text_encoder.dim must be an integer >= 1; {RESTORE}")
+    if encoder.get("max_length") is not None and (not _is_int(encoder["max_length"]) or encoder["max_length"] < 1):
+        raise UsageError(f"{where}: hparams.text_encoder.max_length must be null or an integer >= 1; {RESTORE}")
+
+
+def _get(d: dict, dotted: str):
+    for part in dotted.split("."):
+        d = d.get(part) if isinstance(d, dict) else None
+    return d
+
+
+def _is_int(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _numbers(values, length: int) -> bool:
+    return isinstance(values, list) and len(values) == length and all(_is_number(v) for v in values)
+
+
+def _shown(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _short(err: BaseException) -> str:
+    return str(err).splitlines()[0][:160] if str(err) else type(err).__name__
