@@ -289,7 +289,9 @@ def build(src: str | Path, out: str | Path, counts: dict[str, int], seed: int = 
         if (src / "LICENSE").is_file():
             text = (src / "LICENSE").read_text()
             atomic_write(build / "LICENSE", lambda tmp: Path(tmp).write_text(text), suffix="")
-        atomic_write(build / "README.md", lambda tmp: Path(tmp).write_text(readme(out.name, report, meta)), suffix=".md")
+        atomic_write(
+            build / "README.md", lambda tmp: Path(tmp).write_text(readme(out.name, report, meta)), suffix=".md"
+        )
         # meta.json last: its presence marks a complete dataset (check_output)
         for name, obj in (("report.json", report), ("meta.json", meta)):
             atomic_write(build / name, lambda tmp, o=obj: Path(tmp).write_text(json.dumps(o, indent=1)), suffix=".json")
