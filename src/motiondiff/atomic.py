@@ -27,6 +27,9 @@ def atomic_write(path: str | os.PathLike, write: Callable[[str], object], suffix
     return path
 
 
+TEMP_GLOB = ".*.tmp*"  # what atomic_write leaves when its process is killed mid-write
+
+
 def save_npy(path: str | os.PathLike, array) -> Path:
     """``np.save`` through `atomic_write`: a crash or a full disk leaves no truncated array under the final name."""
     import numpy as np

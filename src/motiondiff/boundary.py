@@ -19,6 +19,7 @@ import socket
 import sys
 from pathlib import Path
 
+from motiondiff.atomic import TEMP_GLOB
 from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError
 from motiondiff.errors import UsageError
 
@@ -94,7 +95,7 @@ def _holder(lock: Path) -> int | None:
 
 def refuse_if_in_use(out: Path) -> None:
     """Refuse ``out`` while another live run holds its lock (checked before Hydra writes its own files there too)."""
-    pid = _holder(Path(out) / LOCK_NAME)
+    pid = None if _worker_process() else _holder(Path(out) / LOCK_NAME)  # DDP's other ranks share rank 0's folder
     if pid is not None:
         raise UsageError(f"another run (pid {pid}) is writing to {out}: wait for it, or give this run its own folder "
                          "(leave hydra.run.dir unset)")  # fmt: skip
@@ -152,8 +153,10 @@ def run_folder(out: Path, job_name: str):
 
 
 def _remove_failed(out: Path, fresh: bool, quiet: bool = False) -> None:
-    kept = [p for pattern in KEPT_OUTPUTS for p in out.rglob(pattern)]
+    kept = [p for pattern in KEPT_OUTPUTS for p in out.rglob(pattern) if not p.name.startswith(".")]
     if kept:
+        for temp in out.rglob(TEMP_GLOB):  # half-written files of the killed run (never a complete one)
+            temp.unlink(missing_ok=True)
         if not quiet:
             print(f"note: the failed run's checkpoints are kept in {out}", file=sys.stderr)
     elif fresh:

@@ -138,7 +138,7 @@ def test_training_killed_anywhere_leaves_loadable_checkpoints_and_resumes(tmp_pa
         last = newest_last(root)  # each run resumes the last one's progress, as a user would after a crash
         resume = (f"ckpt_path={last}",) if last is not None else ()
         killed(tmp_path, "train", *TRAIN, "trainer.max_steps=100000", *resume, after=at)
-        for ckpt in root.glob("*/checkpoints/*.ckpt"):
+        for ckpt in root.glob("*/checkpoints/[!.]*.ckpt"):  # .<name>.*.tmp.ckpt: a write cut by the kill
             state = torch.load(ckpt, map_location="cpu", weights_only=True)
             assert state["global_step"] > 0 and state["state_dict"], ckpt
     last = newest_last(root)
@@ -146,3 +146,5 @@ def test_training_killed_anywhere_leaves_loadable_checkpoints_and_resumes(tmp_pa
     timed(tmp_path, "train", *TRAIN, f"trainer.max_steps={step + 2}", f"ckpt_path={last}")
     final = torch.load(newest_last(root), map_location="cpu", weights_only=True)
     assert final["global_step"] == step + 2
+    cut = sorted(p.name for p in root.glob("*/checkpoints/.*.tmp*"))
+    assert cut == [], f"the next start did not remove the killed runs' half-written checkpoints: {cut}"
