@@ -37,8 +37,10 @@ train: setup allocator
 	@echo "checkpoint: $$(ls -t outputs/train/*/checkpoints/last.ckpt | head -1)"
 	@echo "samples:    $$(ls -td outputs/sample/*/ | head -1)"
 
+# Two workers, each taking whole test files (module fixtures run once): the suite's subprocesses and imports are
+# mostly single-threaded, so the second core does real work.
 test: setup browser
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n 2 --dist loadfile
 
 # Debian packages some targets want: $(call debian_package,<check that it is there>,<package>,<what for>,<else>)
 # installs <package> when the check fails and apt-get can run (as root); otherwise it says so in one line and goes on.
