@@ -50,7 +50,7 @@ def test_sample_is_deterministic_for_a_seed(text_ckpt, tmp_path):
         d = tmp_path / str(k)
         d.mkdir()
         run_cli("sample.py", f"checkpoint={text_ckpt}", "text=a person bows", "num_samples=1", "length=1",
-                "export=none", "sampler.steps=3", "seed=7", env_dir=d)  # fmt: skip
+                "export=none", "sampler.steps=3", "seed=7", "precision=32", env_dir=d)  # fmt: skip
         outs.append(np.load(next((d / "outputs" / "sample").glob("*/a_person_bows_00_joints.npy"))))
     np.testing.assert_array_equal(outs[0], outs[1])
 
