@@ -17,11 +17,13 @@ import os
 import shutil
 import socket
 import sys
+import time
 from pathlib import Path
 
 from motiondiff.atomic import TEMP_GLOB
 from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError
 from motiondiff.errors import UsageError
+from motiondiff.processes import alive
 
 USER_ERRORS = (UsageError, DatasetNotFoundError, RepresentationError)  # raised with a message that names the fix
 LOCK_NAME = ".motiondiff.lock"
@@ -84,13 +86,7 @@ def _read_lock(lock: Path) -> tuple[int, bool]:
 def _holder(lock: Path) -> int | None:
     """The pid of a live process holding ``lock``, None when the lock is stale or unreadable."""
     pid, _ = _read_lock(lock)
-    try:
-        os.kill(pid, 0) if pid > 0 else None
-    except PermissionError:
-        return pid  # alive, another user's
-    except OSError:
-        return None
-    return pid if 0 < pid != os.getpid() else None
+    return pid if pid != os.getpid() and alive(pid) else None
 
 
 def refuse_if_in_use(out: Path) -> None:
@@ -112,6 +108,15 @@ def remove_stale_runs(parent: Path) -> None:
         if pid > 0 and _holder(lock) is None:
             lock.unlink(missing_ok=True)
             _remove_failed(lock.parent, fresh, quiet=True)
+    for hydra in parent.glob("*/.hydra"):  # killed before its lock: an hour on, it is dead
+        out = hydra.parent
+        if not (out / LOCK_NAME).exists() and _only_start_files(out) and time.time() - out.stat().st_mtime > 3600:
+            shutil.rmtree(out, ignore_errors=True)
+
+
+def _only_start_files(out: Path) -> bool:
+    """Nothing but Hydra's config folder and empty logs: a run that never got to work (nor finished: it logs)."""
+    return all(p.name == ".hydra" or (p.suffix == ".log" and p.stat().st_size == 0) for p in out.iterdir())
 
 
 def _worker_process() -> bool:

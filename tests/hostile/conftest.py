@@ -15,6 +15,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[2]
 BIN = Path(sys.executable).parent
 
@@ -29,13 +31,22 @@ def command(name: str) -> list[str]:
     return [str(script)]
 
 
-def run_cli(tmp: Path, name: str, *args: str, timeout: float = 300, env: dict | None = None, stdin=None,
-            check_paths: bool = True) -> subprocess.CompletedProcess:  # fmt: skip
-    """Run a command in ``tmp`` (its outputs under ``tmp/outputs``; hydra.run.dir is not set, so run-folder rules
-    are tested too)."""
-    full_env = {**os.environ, "MOTIONDIFF_OUTPUT_DIR": str(tmp / "outputs"), "HYDRA_FULL_ERROR": "0", **(env or {})}
-    return subprocess.run([*command(name), *args], cwd=tmp, env=full_env, capture_output=True, text=True,
+def cli_env(tmp: Path, env: dict | None = None) -> dict:
+    """The environment a command runs in: its outputs under ``tmp/outputs`` (hydra.run.dir is not set, so the
+    run-folder rules are tested too) and Hydra's short error reports."""
+    return {**os.environ, "MOTIONDIFF_OUTPUT_DIR": str(tmp / "outputs"), "HYDRA_FULL_ERROR": "0", **(env or {})}
+
+
+def run_cli(tmp: Path, name: str, *args: str, timeout: float = 300, env: dict | None = None,
+            stdin=None) -> subprocess.CompletedProcess:  # fmt: skip
+    """Run a command in ``tmp`` to its end."""
+    return subprocess.run([*command(name), *args], cwd=tmp, env=cli_env(tmp, env), capture_output=True, text=True,
                           timeout=timeout, stdin=stdin)  # fmt: skip
+
+
+def popen_cli(tmp: Path, name: str, *args: str, **popen) -> subprocess.Popen:
+    """Start a command in ``tmp`` and return at once (for tests that interrupt or kill it)."""
+    return subprocess.Popen([*command(name), *args], cwd=tmp, env=cli_env(tmp), **popen)
 
 
 def assert_refused(proc: subprocess.CompletedProcess, *needles: str, code: int = 2) -> str:
@@ -79,3 +90,9 @@ def run_collected(request, tmp_path_factory, workers: int = 2) -> dict[str, tupl
 
     with ThreadPoolExecutor(max_workers=workers) as pool:
         return dict(pool.map(run, wanted))
+
+
+@pytest.fixture(scope="module")
+def results(request, tmp_path_factory) -> dict[str, tuple[subprocess.CompletedProcess, Path]]:
+    """The requesting module's ``case`` parameters, each run once (see `run_collected`)."""
+    return run_collected(request, tmp_path_factory)

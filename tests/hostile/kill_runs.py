@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from conftest import REPO, command, run_cli
+from conftest import REPO, popen_cli, run_cli
 
 KILLS = 10
 BANDAI = REPO.parent / "shared" / "data" / "bandai-namco" / "bandai-ds1.zip"
@@ -32,9 +32,7 @@ def timed(tmp: Path, name: str, *args: str) -> float:
 
 def killed(tmp: Path, name: str, *args: str, after: float) -> None:
     """Start ``motiondiff-<name> *args`` in ``tmp`` and SIGKILL it (and any worker it started) ``after`` seconds."""
-    env = {**os.environ, "MOTIONDIFF_OUTPUT_DIR": str(tmp / "outputs"), "HYDRA_FULL_ERROR": "0"}
-    proc = subprocess.Popen([*command(name), *args], cwd=tmp, env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)  # fmt: skip
+    proc = popen_cli(tmp, name, *args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
         proc.wait(timeout=after)
     except subprocess.TimeoutExpired:

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from conftest import Hostile, assert_refused, files_under, run_collected
+from conftest import Hostile, assert_refused, files_under
 
 MODEL = "checkpoint=shipped"
 SMALL = ("num_samples=1", "export=none", "length=1")
@@ -111,11 +111,6 @@ CASES = [
     Hostile("train_heads_do_not_divide", "train", ("model.num_heads=3",), ("model.num_heads=3", "divide")),
     Hostile("train_missing_dataset", "train", ("dataset=bvh", "dataset.root=/nonexistent/bvh"), ("nonexistent",)),
 ]
-
-
-@pytest.fixture(scope="module")
-def results(request, tmp_path_factory) -> dict:
-    return run_collected(request, tmp_path_factory)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])

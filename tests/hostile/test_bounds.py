@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 from bounds_files import bvh_text, npz_bomb, set_line, write, zip_bomb, zip_of
-from conftest import Hostile, assert_refused, command, files_under, run_collected
+from conftest import Hostile, assert_refused, cli_env, command, files_under
 
 from motiondiff.data.formats.bvh_parse import MAX_VALUES
 
@@ -154,9 +154,8 @@ def run_measured(tmp: Path, name: str, *args: str) -> tuple[subprocess.Completed
     """``motiondiff-<name> *args`` in ``tmp`` through a fresh wrapper process; (the process, the child's peak RSS in
     bytes). Only the command runs under the wrapper, so its peak is the command's own (workers included: the largest
     one's)."""
-    env = {**os.environ, "MOTIONDIFF_OUTPUT_DIR": str(tmp / "outputs"), "HYDRA_FULL_ERROR": "0"}
     peak = tmp.parent / f"{tmp.name}.peak"
-    proc = subprocess.run([sys.executable, "-c", _PEAK, str(peak), *command(name), *args], cwd=tmp, env=env,
+    proc = subprocess.run([sys.executable, "-c", _PEAK, str(peak), *command(name), *args], cwd=tmp, env=cli_env(tmp),
                           capture_output=True, text=True, timeout=300)  # fmt: skip
     return proc, int(peak.read_text()) * 1024
 
@@ -172,11 +171,6 @@ MEASURED = {  # name: (case, refused)
     "prepare_800mb_zip_bomb_lying": (prepare("m3", _bomb(1000), "does not inflate to the 1000 bytes"), True),
     "edit_470k_frame_z_up_bvh": (Hostile("m4", "edit", EDIT, (), _long_bvh), False),
 }
-
-
-@pytest.fixture(scope="module")
-def results(request, tmp_path_factory) -> dict:
-    return run_collected(request, tmp_path_factory)
 
 
 @pytest.fixture(scope="module")

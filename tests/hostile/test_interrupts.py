@@ -3,20 +3,17 @@ no folder left; a second run aimed at a folder another live run is writing is re
 
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
 import time
 
-from conftest import assert_refused, command, files_under, run_cli
+from conftest import assert_refused, files_under, popen_cli, run_cli
 
 PROMPTS = "".join(f"a person walks forward then turns {k} times\n" for k in range(20))
 
 
 def start(tmp, name, *args):
-    env = {**os.environ, "MOTIONDIFF_OUTPUT_DIR": str(tmp / "outputs"), "HYDRA_FULL_ERROR": "0"}
-    return subprocess.Popen([*command(name), *args], cwd=tmp, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    return popen_cli(tmp, name, *args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
 def wait_for(predicate, timeout=120.0):

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 import torch
-from conftest import REPO, Hostile, assert_refused, files_under, run_collected
+from conftest import REPO, Hostile, assert_refused, files_under
 from safetensors.torch import load_file, save_file
 
 from motiondiff.release_checks import sha256_of
@@ -242,11 +242,6 @@ CASES = [
         _resume(64),
     ),  # fmt: skip
 ]
-
-
-@pytest.fixture(scope="module")
-def results(request, tmp_path_factory) -> dict:
-    return run_collected(request, tmp_path_factory)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])

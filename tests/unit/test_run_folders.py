@@ -6,6 +6,8 @@ import os
 import socket
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import pytest
 
@@ -70,3 +72,19 @@ def test_a_failed_run_removes_its_fresh_folder_and_a_worker_rank_leaves_it_to_it
             assert not (out / LOCK_NAME).exists()
             raise RuntimeError("failed")
     assert out.exists(), "rank 1 must not remove the folder rank 0 is writing"
+
+
+def test_a_run_killed_before_its_lock_goes_an_hour_later_and_a_logged_one_stays(tmp_path):
+    def started(name: str, log: str, age_s: float) -> Path:
+        out = tmp_path / name
+        (out / ".hydra").mkdir(parents=True)
+        (out / "sample.log").write_text(log)
+        then = time.time() - age_s
+        os.utime(out, (then, then))
+        return out
+
+    old, recent, logged = started("old", "", 7200), started("recent", "", 60), started("logged", "done\n", 7200)
+    remove_stale_runs(tmp_path)
+    assert not old.exists()
+    assert recent.exists(), "a run may be between Hydra's start files and its lock right now"
+    assert logged.exists(), "a run that logged got to work: never removed without a lock"

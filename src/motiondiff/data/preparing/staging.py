@@ -19,20 +19,10 @@ import re
 import shutil
 from pathlib import Path
 
+from motiondiff.processes import alive
+
 _AT_FDCWD, _RENAME_EXCHANGE = -100, 2
 _TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<kind>building|replaced)-(?P<pid>\d+)$")
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def recover(out: Path) -> None:
@@ -42,7 +32,7 @@ def recover(out: Path) -> None:
         return
     for path in sorted(out.parent.iterdir()):
         m = _TEMP.match(path.name)
-        if m is None or m["name"] != out.name or _alive(int(m["pid"])):
+        if m is None or m["name"] != out.name or alive(int(m["pid"])):
             continue
         if m["kind"] == "replaced" and not out.exists():
             os.rename(path, out)  # killed between the fallback's two renames: the old dataset is still complete
