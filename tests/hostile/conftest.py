@@ -44,9 +44,9 @@ def run_cli(tmp: Path, name: str, *args: str, timeout: float = 300, env: dict | 
                           timeout=timeout, stdin=stdin)  # fmt: skip
 
 
-def popen_cli(tmp: Path, name: str, *args: str, **popen) -> subprocess.Popen:
+def popen_cli(tmp: Path, name: str, *args: str, env: dict | None = None, **popen) -> subprocess.Popen:
     """Start a command in ``tmp`` and return at once (for tests that interrupt or kill it)."""
-    return subprocess.Popen([*command(name), *args], cwd=tmp, env=cli_env(tmp), **popen)
+    return subprocess.Popen([*command(name), *args], cwd=tmp, env=cli_env(tmp, env), **popen)
 
 
 def assert_refused(proc: subprocess.CompletedProcess, *needles: str, code: int = 2) -> str:

@@ -26,15 +26,26 @@ def wait_for(predicate, timeout=120.0):
 
 
 def test_ctrl_c_while_sampling_is_one_line_exit_130_and_leaves_no_folder(tmp_path):
+    """Ctrl-C after the first prompt's samples are written, while the third prompt is sampled (read from the
+    command's own unbuffered output, so the moment is certain however loaded the machine is)."""
     (tmp_path / "prompts.txt").write_text(PROMPTS)
-    proc = start(tmp_path, "sample", "checkpoint=shipped", "prompts_file=prompts.txt", "length=1", "export=bvh")
-    try:
-        assert wait_for(lambda: any(p.suffix == ".bvh" for p in (tmp_path / "outputs").rglob("*"))), "no sample came"
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=120)
-    finally:
-        proc.kill()
-    completed = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+    stderr = tmp_path / "stderr.txt"
+    with stderr.open("w") as err_file:
+        proc = popen_cli(tmp_path, "sample", "checkpoint=shipped", "prompts_file=prompts.txt", "length=1",
+                         "export=bvh", env={"PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE, stderr=err_file,
+                         text=True)  # fmt: skip
+        seen = []
+        try:
+            for line in proc.stdout:
+                seen.append(line)
+                if sum(x.startswith("sampling ") for x in seen) == 3:
+                    break
+            assert any(p.suffix == ".bvh" for p in (tmp_path / "outputs").rglob("*")), "".join(seen)
+            proc.send_signal(signal.SIGINT)
+            out, _ = proc.communicate(timeout=120)
+        finally:
+            proc.kill()
+    completed = subprocess.CompletedProcess(proc.args, proc.returncode, "".join(seen) + out, stderr.read_text())
     assert_refused(completed, "interrupted", code=130)
     assert files_under(tmp_path / "outputs") == [], "an interrupted run left its partial samples"
 
