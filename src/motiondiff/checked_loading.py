@@ -13,7 +13,6 @@ import re
 import zipfile
 from pathlib import Path
 
-import torch
 from safetensors import SafetensorError
 
 from motiondiff.errors import UsageError
@@ -55,6 +54,8 @@ def reading(path: str | Path, what: str = "checkpoint", fix: str = CKPT_FIX):
 
 def torch_load(path: str | Path, what: str = "checkpoint", fix: str = CKPT_FIX) -> dict:
     """``torch.load(path, weights_only=True)`` on the CPU, its failures as one UsageError; a dict or refused."""
+    import torch  # here, not at the top: `reading` serves the checks that run before torch is imported
+
     with reading(path, what, fix):
         state = torch.load(path, map_location="cpu", weights_only=True)
     if not isinstance(state, dict):
@@ -64,6 +65,8 @@ def torch_load(path: str | Path, what: str = "checkpoint", fix: str = CKPT_FIX) 
 
 def check_finite_state(state: dict, source: str | Path, fix: str = CKPT_FIX) -> None:
     """Refuse weights with a NaN or infinity (one bad value makes every generated motion NaN)."""
+    import torch
+
     bad = [k for k, v in state.items() if torch.is_tensor(v) and v.is_floating_point() and not bool(v.isfinite().all())]
     if bad:
         raise UsageError(f"{source} holds NaN or infinite weights ({len(bad)} tensor(s), first {bad[0]!r}): the "
@@ -72,6 +75,8 @@ def check_finite_state(state: dict, source: str | Path, fix: str = CKPT_FIX) -> 
 
 def check_same_shapes(state: dict, own: dict, source: str | Path, fix: str, model: str = "its model") -> None:
     """Refuse weights whose names, shapes or dtypes differ from ``model``'s own (another architecture)."""
+    import torch
+
     missing = [k for k in own if k not in state]
     unexpected = [k for k in state if k not in own]
     shapes = [f"{k} {tuple(state[k].shape)} vs {tuple(own[k].shape)}" for k in state

@@ -20,19 +20,12 @@ from motiondiff.errors import UsageError
 from motiondiff.release_checks import (
     FORMAT,
     RESTORE,
+    check_release_files,
     check_release_meta,
-    check_weights_checksum,
     read_release_json,
+    release_paths,
     sha256_of,
 )
-
-
-def release_paths(path: str | Path) -> tuple[Path, Path]:
-    """(weights, config) of a release named by either file or their common stem."""
-    stem = Path(path)
-    if stem.suffix in (".safetensors", ".json"):
-        stem = stem.with_suffix("")
-    return stem.with_suffix(".safetensors"), stem.with_suffix(".json")
 
 
 def save_release(module, path: str | Path, provenance: dict | None = None) -> tuple[Path, Path]:
@@ -58,15 +51,12 @@ def load_release(path: str | Path, device: str = "cpu"):
     from motiondiff.lit.diffusion import MotionDiffusionModule
 
     weights, config = release_paths(path)
-    for f in (weights, config):
-        if not f.is_file():
-            raise UsageError(f"release file {f} is missing: a release is {weights.name} + {config.name} side by side")
+    check_release_files(path)  # the files, the checksum, finite weights
     meta = read_release_json(config)
-    check_release_meta(meta, config)  # before anything is built from it
-    check_weights_checksum(weights, config, meta["weights_sha256"])
+    check_release_meta(meta, config)  # the hyper-parameters too, before anything is built from them
     with reading(weights, "release weights", RESTORE):
         state = load_file(str(weights), device="cpu")
-    check_finite_state(state, f"release weights {weights}", RESTORE)
+    check_finite_state(state, f"release weights {weights}", RESTORE)  # the bfloat16 ones numpy could not read
     with reading(config, "release config", RESTORE):
         module = MotionDiffusionModule(**meta["hparams"])
         bridge_from_spec(meta["hparams"].get("representation"), meta["hparams"]["feature_dim"])  # what saving reads

@@ -24,6 +24,48 @@ MAX_CONFIG_BYTES = 10 << 20  # a release JSON is kilobytes (hyper-parameters, st
 RESTORE = "restore the release (`git checkout -- checkpoints` for a shipped one) or release the checkpoint again"
 
 
+def release_paths(path: str | Path) -> tuple[Path, Path]:
+    """(weights, config) of a release named by either file or their common stem."""
+    stem = Path(path)
+    if stem.suffix in (".safetensors", ".json"):
+        stem = stem.with_suffix("")
+    return stem.with_suffix(".safetensors"), stem.with_suffix(".json")
+
+
+def check_release_files(path: str | Path) -> None:
+    """The checks of a release that need no model and no torch (its files, the JSON's top level, the checksum,
+    finite weights): a command runs them before its heavy imports, so a broken release is refused in a second.
+    Loading (``release.load_release``) checks all of it again, and the hyper-parameters and shapes too."""
+    weights, config = release_paths(path)
+    for f in (weights, config):
+        if not f.is_file():
+            raise UsageError(f"release file {f} is missing: a release is {weights.name} + {config.name} side by side")
+    meta = read_release_json(config)
+    check_release_meta(meta, config, hparams=False)
+    check_weights_checksum(weights, config, meta["weights_sha256"])
+    from safetensors import safe_open  # numpy views: no torch
+
+    from motiondiff.checked_loading import reading
+
+    with reading(weights, "release weights", RESTORE):
+        with safe_open(str(weights), framework="numpy") as f:
+            bad = [k for k in f.keys() if _numpy_float(f, k) and not _finite(f.get_tensor(k))]
+    if bad:
+        raise UsageError(f"release weights {weights} holds NaN or infinite weights ({len(bad)} tensor(s), first "
+                         f"{bad[0]!r}): the weights are corrupt or diverged; {RESTORE}")  # fmt: skip
+
+
+def _numpy_float(f, key: str) -> bool:
+    """Whether numpy can read this tensor as floats (bfloat16 it cannot: loading checks those)."""
+    return f.get_slice(key).get_dtype() in ("F16", "F32", "F64")
+
+
+def _finite(array) -> bool:
+    import numpy as np
+
+    return bool(np.isfinite(array).all())
+
+
 def sha256_of(path: str | Path) -> str:
     """Hex SHA-256 of a file, read in 1 MiB blocks."""
     digest = hashlib.sha256()
@@ -60,8 +102,9 @@ def check_weights_checksum(weights: Path, config: Path, expected: str) -> None:
                          f"{actual[:12]}..., expected {expected[:12]}...): the file is corrupt or changed; {RESTORE}")  # fmt: skip
 
 
-def check_release_meta(meta: dict, config: Path) -> None:
-    """Raise UsageError naming the first key of a release JSON that breaks the schema."""
+def check_release_meta(meta: dict, config: Path, hparams: bool = True) -> None:
+    """Raise UsageError naming the first key of a release JSON that breaks the schema (``hparams=False``: its top
+    level only, which needs no import of the model's class)."""
     where = f"release config {config}"
     if meta.get("format") != FORMAT:
         raise UsageError(f"{where} is not a motiondiff release (format {_shown(meta.get('format'))}, expected "
@@ -77,10 +120,10 @@ def check_release_meta(meta: dict, config: Path) -> None:
         raise UsageError(f"{where}: weights_sha256 must be 64 lowercase hex digits, got {digest!r}; {RESTORE}")
     if not isinstance(meta["provenance"], dict):
         raise UsageError(f"{where}: provenance must be an object; {RESTORE}")
-    hparams = meta["hparams"]
-    if not isinstance(hparams, dict):
+    if not isinstance(meta["hparams"], dict):
         raise UsageError(f"{where}: hparams must be an object; {RESTORE}")
-    _check_hparams(hparams, where)
+    if hparams:
+        _check_hparams(meta["hparams"], where)
 
 
 def _keys_problem(unknown: list, missing: list, allowed) -> str:

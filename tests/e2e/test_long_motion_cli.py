@@ -10,7 +10,7 @@ import pytest
 from cli_helpers import run_cli
 
 from motiondiff.cli.common import UsageError
-from motiondiff.cli.sample import parse_timed_prompts
+from motiondiff.cli.prompt_inputs import parse_timed_prompts
 
 FAST = ["sampler=ddim", "steps=5", "export=none", "num_samples=1"]
 
@@ -72,7 +72,8 @@ def test_timed_prompt_errors_are_one_clear_line(text_ckpt, tmp_path, overrides, 
         return
     from hydra import compose, initialize_config_dir
 
-    from motiondiff.cli.sample import collect_prompts, long_motion_settings, split_timed
+    from motiondiff.cli.prompt_inputs import split_timed
+    from motiondiff.cli.sample import collect_prompts, long_motion_settings
     from motiondiff.errors import UsageError
     from motiondiff.lit.loading import load_model
     from motiondiff.paths import CONF_DIR

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from conftest import REPO, popen_cli, run_cli
+from hostile_cli import REPO, popen_cli, run_cli
 
 KILLS = 10
 BANDAI = REPO.parent / "shared" / "data" / "bandai-namco" / "bandai-ds1.zip"

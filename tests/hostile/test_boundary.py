@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from conftest import Hostile, assert_refused, files_under
+from hostile_cli import Hostile, assert_refused, files_under
 
 MODEL = "checkpoint=shipped"
 SMALL = ("num_samples=1", "export=none", "length=1")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 from bounds_files import bvh_text, npz_bomb, set_line, write, zip_bomb, zip_of
-from conftest import Hostile, assert_refused, cli_env, command, files_under
+from hostile_cli import Hostile, assert_refused, cli_env, command, files_under
 
 from motiondiff.data.formats.bvh_parse import MAX_VALUES
 

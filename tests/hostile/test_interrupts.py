@@ -7,7 +7,7 @@ import signal
 import subprocess
 import time
 
-from conftest import assert_refused, files_under, popen_cli, run_cli
+from hostile_cli import assert_refused, files_under, popen_cli, run_cli
 
 PROMPTS = "".join(f"a person walks forward then turns {k} times\n" for k in range(20))
 

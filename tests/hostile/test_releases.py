@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 import torch
-from conftest import REPO, Hostile, assert_refused, files_under
+from hostile_cli import REPO, Hostile, assert_refused, files_under
 from safetensors.torch import load_file, save_file
 
 from motiondiff.release_checks import sha256_of

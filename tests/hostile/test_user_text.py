@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import os
 
-from conftest import files_under, run_cli
+from hostile_cli import files_under, run_cli
 
 SECRET = "motiondiff-hostile-secret-value"
 

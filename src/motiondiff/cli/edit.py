@@ -19,9 +19,10 @@ from motiondiff.edit.inputs import InputMotion, load_input_motion, read_bvh_inpu
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import check_formats_for, export_features
 from motiondiff.hardware import inference_precision, resolve_device
-from motiondiff.lit.conditions import check_action, check_text
+from motiondiff.lit.conditions import check_action
 from motiondiff.lit.generation import check_num_samples, feed_forward_shape, sampling_precision
 from motiondiff.lit.loading import load_model as load_module
+from motiondiff.prompt_text import check_text
 from motiondiff.studies.editing import edit_numbers
 
 KINDS = ("inbetween", "parts")

@@ -8,8 +8,21 @@ from __future__ import annotations
 from motiondiff.cli import validate
 from motiondiff.scripting import run_hydra as _run
 
-# The rule tables are checked before a command imports torch and Lightning (seconds), so a mistyped number is refused
+# The rule tables, the prompts and the model file are checked before a command imports Lightning and the text
+# encoder (about 7 s of CPU on a 2-core machine), so a mistyped number, an empty prompt or a corrupt model is refused
 # at once; each command checks them again itself (for callers that skip these entry points).
+
+
+def _before_model(cfg, condition: str = "text") -> None:
+    """The checks of a command that need no model: its device, and its model file (``checkpoint=``)."""
+    from motiondiff.model_file_checks import check_model_file
+    from motiondiff.paths import find_checkpoint
+
+    if str(cfg.get("device", "cpu")).strip().lower() not in ("cpu", "auto"):
+        from motiondiff.hardware import resolve_device
+
+        resolve_device(cfg.device)
+    check_model_file(find_checkpoint(cfg.checkpoint, cfg.paths.output_dir, condition))
 
 
 def train() -> None:
@@ -29,6 +42,10 @@ def sample() -> None:
             from motiondiff.cli.sample_guided import run as guided
 
             return guided(cfg)
+        from motiondiff.cli.prompt_inputs import check_prompt_inputs
+
+        check_prompt_inputs(cfg)
+        _before_model(cfg, "action" if cfg.get("action") is not None else "text")
         from motiondiff.cli.sample import run as mdm
 
         return mdm(cfg)
@@ -39,6 +56,7 @@ def sample() -> None:
 def edit() -> None:
     def run(cfg):
         validate.check(cfg, validate.RULES_EDIT)
+        _before_model(cfg)
         from motiondiff.cli.edit import run as edit_run
 
         return edit_run(cfg)
@@ -49,6 +67,7 @@ def edit() -> None:
 def evaluate() -> None:
     def run(cfg):
         validate.check(cfg, validate.RULES_EVALUATE)
+        _before_model(cfg)
         from motiondiff.cli.evaluate import run as evaluate_run
 
         return evaluate_run(cfg)

@@ -9,8 +9,6 @@ ground contacts (`edit.foot_cleanup`)."""
 
 from __future__ import annotations
 
-import copy
-import math
 import re
 from dataclasses import asdict
 from pathlib import Path
@@ -28,6 +26,7 @@ from motiondiff.cli.common import (
     sampling_steps,
     to_dict,
 )
+from motiondiff.cli.prompt_inputs import check_one_source, read_prompts_file, split_timed
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.data.preparing.captions import measure
 from motiondiff.data.representations.spec import bridge_from_spec
@@ -38,7 +37,7 @@ from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
 from motiondiff.export.smpl_mesh import render_body
 from motiondiff.hardware import inference_precision, resolve_device
-from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
+from motiondiff.lit.conditions import check_action, generation_frames, repeated
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.lit.generation import (
     MAX_LONG_SAMPLES,
@@ -48,19 +47,15 @@ from motiondiff.lit.generation import (
     sampling_precision,
 )
 from motiondiff.lit.loading import load_model
-from motiondiff.scripting import literal
+from motiondiff.prompt_text import check_text
 from motiondiff.studies.behaviour import mean_joint_speed
-
-# "<text>:<seconds>", seconds a positive decimal, optionally "4s"; a colon not followed by a number is text
-TIMED = re.compile(r"^(?P<text>.*?)\s*:\s*(?P<seconds>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*s?\s*$")
 
 
 def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str | None]:
     """The prompts to generate for: texts, action names, or [None] for unconditioned generation."""
     kind = module.condition_kind
+    check_one_source(cfg)
     given = [x for x in (cfg.text, cfg.prompts, cfg.prompts_file, cfg.action) if x is not None]
-    if len(given) > 1:
-        raise UsageError("give only one of text=, prompts=, prompts_file= or action=")
     if kind == "none":
         if given:
             raise UsageError("this model is unconditioned: drop text=/prompts=/action=")
@@ -73,12 +68,7 @@ def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str 
         names = [cfg.action] if isinstance(cfg.action, str) else list(cfg.action)
         return [check_action(name, list(module.hparams.action_names)) for name in names]
     if cfg.prompts_file is not None:
-        path = Path(cfg.prompts_file)
-        if not path.is_file():
-            raise UsageError(f"prompts_file {path} not found")
-        texts = [line for line in path.read_text().splitlines() if line.strip()]
-        if not texts:
-            raise UsageError(f"prompts_file {path} has no prompts (one per line)")
+        texts = read_prompts_file(cfg.prompts_file)
     elif cfg.prompts is not None:
         texts = list(cfg.prompts) if isinstance(cfg.prompts, ListConfig | list) else [cfg.prompts]
     elif cfg.text is not None:
@@ -88,51 +78,6 @@ def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str 
             "this model is text-conditioned: pass text='a person walks forward' (or prompts=/prompts_file=)"
         )
     return [check_text(t) for t in texts]
-
-
-def parse_timed_prompts(items: list[str]) -> list[tuple[str, float]] | None:
-    """["a person walks:4", "a person waves:2.5"] -> [("a person walks", 4.0), ("a person waves", 2.5)]; None when
-    no item ends in :<seconds> (separate samples, as before). Every item or none must be timed."""
-    matches = [TIMED.match(str(item)) for item in items]
-    if not any(matches):
-        return None
-    untimed = [str(item) for item, m in zip(items, matches, strict=True) if m is None]
-    if untimed:
-        raise UsageError(
-            f"either every prompt ends in :<seconds> (one long motion through them) or none does (separate "
-            f"samples); these have no time: {', '.join(repr(u) for u in untimed)}"
-        )
-    timed = []
-    for m in matches:
-        text, seconds = m["text"].strip(), float(m["seconds"])
-        if not text:
-            raise UsageError(f"{m.string!r} has a time but no prompt before the colon")
-        if not (seconds > 0 and math.isfinite(seconds)):
-            raise UsageError(f"{m.string!r}: the seconds after the colon must be positive")
-        timed.append((text, seconds))
-    return timed
-
-
-def split_timed(cfg: DictConfig) -> tuple[DictConfig, list[float] | None]:
-    """The config with timed prompts=/prompts_file=/action= items reduced to their texts, and their seconds (None:
-    untimed, the config as given). text= is one prompt and never timed."""
-    key = next((k for k in ("prompts", "prompts_file", "action") if cfg[k] is not None), None)
-    if key is None or sum(cfg[k] is not None for k in ("text", "prompts", "prompts_file", "action")) > 1:
-        return cfg, None  # nothing to parse, or a conflict that collect_prompts reports
-    if key == "prompts_file":
-        path = Path(cfg.prompts_file)
-        if not path.is_file():
-            return cfg, None
-        items = [line for line in path.read_text().splitlines() if line.strip()]
-    else:
-        items = list(cfg[key]) if isinstance(cfg[key], ListConfig | list) else [cfg[key]]
-    timed = parse_timed_prompts(items)
-    if timed is None:
-        return cfg, None
-    plain = copy.deepcopy(cfg)
-    plain.prompts_file = None
-    plain["action" if key == "action" else "prompts"] = [literal(text) for text, _ in timed]  # data, not config
-    return plain, [seconds for _, seconds in timed]
 
 
 def num_frames(cfg: DictConfig, module: MotionDiffusionModule) -> int:

@@ -48,10 +48,10 @@ def run(cfg: DictConfig) -> Path:
     from motiondiff.cli.sample import cleanup_option, export_formats, render_option, save_samples, smoothing_sigma
     from motiondiff.cli.validate import RULES_SAMPLE, check
     from motiondiff.export.outputs import check_formats_for
-    from motiondiff.lit.conditions import check_text
     from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
     from motiondiff.lit.loading import load_model
     from motiondiff.pipelines import GuidedMotionPipeline
+    from motiondiff.prompt_text import check_text
 
     check(cfg, RULES_SAMPLE)  # types, ranges and finite numbers before any work
     out = Path(HydraConfig.get().runtime.output_dir)

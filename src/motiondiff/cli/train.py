@@ -73,7 +73,7 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
     from safetensors.torch import load_file
 
     from motiondiff.checked_loading import check_finite_state, reading, torch_load
-    from motiondiff.release import release_paths
+    from motiondiff.release_checks import release_paths
 
     path = Path(source)
     if path.suffix in (".safetensors", ".json"):

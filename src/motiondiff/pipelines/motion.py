@@ -26,7 +26,7 @@ from motiondiff.edit.masks import EditError
 from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.errors import UsageError
 from motiondiff.hardware import inference_precision
-from motiondiff.lit.conditions import check_action, check_text, generation_frames, repeated
+from motiondiff.lit.conditions import check_action, generation_frames, repeated
 from motiondiff.lit.diffusion import SAMPLER_STEPS
 from motiondiff.lit.generation import (
     MAX_LONG_SAMPLES,
@@ -39,6 +39,7 @@ from motiondiff.lit.generation import (
 from motiondiff.lit.loading import load_model
 from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
 from motiondiff.pipelines.output import MotionOutput
+from motiondiff.prompt_text import check_text
 
 MODELS_DIR = REPO_DIR / "checkpoints" / "models"
 
