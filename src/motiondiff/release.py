@@ -19,6 +19,7 @@ from motiondiff.checked_loading import check_finite_state, check_same_shapes, re
 from motiondiff.errors import UsageError
 from motiondiff.release_checks import (
     FORMAT,
+    MODEL_CLASS,
     RESTORE,
     check_release_files,
     check_release_meta,
@@ -29,7 +30,7 @@ from motiondiff.release_checks import (
 
 
 def save_release(module, path: str | Path, provenance: dict | None = None) -> tuple[Path, Path]:
-    """Write `<stem>.safetensors` and `<stem>.json` for a MotionDiffusionModule (atomically, weights first)."""
+    """Write `<stem>.safetensors` and `<stem>.json` for a MotionDiffusion model (atomically, weights first)."""
     weights, config = release_paths(path)
     state = {k: v.detach().cpu().contiguous() for k, v in module.state_dict().items()}
     check_finite_state(state, f"the model to release as {weights}", "release a checkpoint whose weights are finite")
@@ -38,7 +39,7 @@ def save_release(module, path: str | Path, provenance: dict | None = None) -> tu
         hparams["text_encoder"].pop("path", None)
     weights.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(weights, lambda tmp: save_file(state, str(tmp)), suffix=".safetensors")
-    meta = {"format": FORMAT, "class": type(module).__name__, "hparams": hparams, "provenance": provenance or {},
+    meta = {"format": FORMAT, "class": MODEL_CLASS, "hparams": hparams, "provenance": provenance or {},
             "weights_sha256": sha256_of(weights)}  # fmt: skip
     text = json.dumps(meta, indent=1, allow_nan=False)
     atomic_write(config, lambda tmp: Path(tmp).write_text(text), suffix=".json")
@@ -48,7 +49,7 @@ def save_release(module, path: str | Path, provenance: dict | None = None) -> tu
 def load_release(path: str | Path, device: str = "cpu"):
     """The module of a release, in eval mode (strict: every tensor must match the architecture in the JSON)."""
     from motiondiff.data.representations.spec import bridge_from_spec
-    from motiondiff.lit.diffusion import MotionDiffusionModule
+    from motiondiff.lit.motion_diffusion import MotionDiffusion
 
     weights, config = release_paths(path)
     check_release_files(path)  # the files, the checksum, finite weights
@@ -58,7 +59,7 @@ def load_release(path: str | Path, device: str = "cpu"):
         state = load_file(str(weights), device="cpu")
     check_finite_state(state, f"release weights {weights}", RESTORE)  # the bfloat16 ones numpy could not read
     with reading(config, "release config", RESTORE):
-        module = MotionDiffusionModule(**meta["hparams"])
+        module = MotionDiffusion(**meta["hparams"])
         bridge_from_spec(meta["hparams"].get("representation"), meta["hparams"]["feature_dim"])  # what saving reads
     if module.representation.dim != meta["hparams"]["feature_dim"]:
         raise UsageError(f"release config {config}: representation {module.representation.name} has "

@@ -17,6 +17,7 @@ from pathlib import Path
 from motiondiff.errors import UsageError
 
 FORMAT = "motiondiff-release-1"
+MODEL_CLASS = "MotionDiffusionModule"  # the class a release names (loaded as lit.motion_diffusion.MotionDiffusion)
 TOP_KEYS = {"format", "class", "hparams", "provenance", "weights_sha256"}
 CONDITION_KINDS = ("text", "action", "none")
 ENCODER_KEYS = {"name", "dim", "max_length"}  # never "path": a release names its encoder, the user's config finds it
@@ -113,8 +114,8 @@ def check_release_meta(meta: dict, config: Path, hparams: bool = True) -> None:
     missing = sorted(TOP_KEYS - set(meta))
     if unknown or missing:
         raise UsageError(f"{where}: {_keys_problem(unknown, missing, TOP_KEYS)}; {RESTORE}")
-    if meta["class"] != "MotionDiffusionModule":
-        raise UsageError(f"{where}: class {meta['class']!r} is not MotionDiffusionModule; {RESTORE}")
+    if meta["class"] != MODEL_CLASS:
+        raise UsageError(f"{where}: class {meta['class']!r} is not {MODEL_CLASS}; {RESTORE}")
     digest = meta["weights_sha256"]
     if not isinstance(digest, str) or not re.fullmatch(r"[0-9a-f]{64}", digest):
         raise UsageError(f"{where}: weights_sha256 must be 64 lowercase hex digits, got {digest!r}; {RESTORE}")
@@ -133,10 +134,10 @@ def _keys_problem(unknown: list, missing: list, allowed) -> str:
 
 
 def _module_parameters() -> tuple[set, set]:
-    """(every, required) hyper-parameter name of MotionDiffusionModule."""
-    from motiondiff.lit.diffusion import MotionDiffusionModule
+    """(every, required) hyper-parameter name of MotionDiffusion (and so of MotionDiffusionModule)."""
+    from motiondiff.lit.motion_diffusion import MotionDiffusion
 
-    params = list(inspect.signature(MotionDiffusionModule.__init__).parameters.values())[1:]
+    params = list(inspect.signature(MotionDiffusion.__init__).parameters.values())[1:]
     return {p.name for p in params}, {p.name for p in params if p.default is inspect.Parameter.empty}
 
 

@@ -28,7 +28,7 @@ from motiondiff.bench.flops import count_flops, matmul_flops_per_s
 from motiondiff.bench.report import machine
 from motiondiff.bench.timing import PeakMemory, median_seconds
 from motiondiff.bench.workloads import TINY
-from motiondiff.lit.diffusion import SAMPLER_STEPS
+from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
 from motiondiff.models.denoiser import PRESETS
 
 

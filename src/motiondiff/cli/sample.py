@@ -38,7 +38,6 @@ from motiondiff.export.outputs import check_formats_for, export_features, parse_
 from motiondiff.export.smpl_mesh import render_body
 from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, generation_frames, repeated
-from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.lit.generation import (
     MAX_LONG_SAMPLES,
     check_num_samples,
@@ -47,11 +46,12 @@ from motiondiff.lit.generation import (
     sampling_precision,
 )
 from motiondiff.lit.loading import load_model
+from motiondiff.lit.motion_diffusion import MotionDiffusion
 from motiondiff.prompt_text import check_text
 from motiondiff.studies.behaviour import mean_joint_speed
 
 
-def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str | None]:
+def collect_prompts(cfg: DictConfig, module: MotionDiffusion) -> list[str | None]:
     """The prompts to generate for: texts, action names, or [None] for unconditioned generation."""
     kind = module.condition_kind
     check_one_source(cfg)
@@ -80,7 +80,7 @@ def collect_prompts(cfg: DictConfig, module: MotionDiffusionModule) -> list[str 
     return [check_text(t) for t in texts]
 
 
-def num_frames(cfg: DictConfig, module: MotionDiffusionModule) -> int:
+def num_frames(cfg: DictConfig, module: MotionDiffusion) -> int:
     """frames= as given, else length= in seconds."""
     return generation_frames(module, cfg.length, frames=cfg.frames)
 
@@ -176,7 +176,7 @@ def cleanup_option(cfg: DictConfig) -> tuple[str, ...]:
     return parse_cleanup(cfg.get("cleanup"))
 
 
-def smoothing_sigma(cfg: DictConfig, module: MotionDiffusionModule | None = None) -> float | None:
+def smoothing_sigma(cfg: DictConfig, module: MotionDiffusion | None = None) -> float | None:
     """smooth_sigma= in frames; 0: off; null: the model's default (``default_smooth_sigma``, off for most)."""
     sigma = cfg.get("smooth_sigma")
     if sigma is None:

@@ -5,17 +5,28 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motiondiff.checked_loading import check_finite_state, reading
-from motiondiff.lit.diffusion import MotionDiffusionModule
+from motiondiff.checked_loading import CKPT_FIX, check_finite_state, check_same_shapes, reading, torch_load
+from motiondiff.errors import UsageError
+from motiondiff.lit.motion_diffusion import MotionDiffusion
 from motiondiff.paths import RELEASE_SUFFIXES
 from motiondiff.release import load_release
 
 
-def load_model(path: str | Path, device: str = "cpu") -> MotionDiffusionModule:
-    """The model in `path`, in eval mode on `device`."""
+def load_model(path: str | Path, device: str = "cpu") -> MotionDiffusion:
+    """The model in `path`, in eval mode on `device`: built from the checkpoint's hyper-parameters and weights as a
+    plain `MotionDiffusion` (generation needs no Lightning; `MotionDiffusionModule.load_from_checkpoint` trains on)."""
     if Path(path).suffix in RELEASE_SUFFIXES:
         return load_release(path, device)
+    state = torch_load(path)
+    weights = state.get("state_dict")
+    if not isinstance(state.get("hyper_parameters"), dict) or not isinstance(weights, dict):
+        raise UsageError(f"checkpoint {path} has no hyper_parameters or state_dict: it is not a motion model's "
+                         f"training checkpoint; {CKPT_FIX}")  # fmt: skip
+    check_finite_state(weights, f"checkpoint {path}")
     with reading(path, "checkpoint"):
-        module = MotionDiffusionModule.load_from_checkpoint(path, map_location=device, weights_only=True)
-    check_finite_state(module.state_dict(), f"checkpoint {path}")
-    return module.eval()
+        module = MotionDiffusion(**state["hyper_parameters"])
+    check_same_shapes(
+        weights, module.state_dict(), f"checkpoint {path}", CKPT_FIX, "the model its hyper_parameters describe"
+    )
+    module.load_state_dict(weights, strict=True)
+    return module.to(device).eval()

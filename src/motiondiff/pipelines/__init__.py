@@ -6,8 +6,17 @@ out = pipe("a person walks forward", seconds=4)
 out.save("out", formats=["bvh", "mp4"])
 """
 
-from motiondiff.pipelines.guided import GuidedMotionPipeline
 from motiondiff.pipelines.motion import MotionPipeline, resolve_model
 from motiondiff.pipelines.output import MotionOutput
+
+
+def __getattr__(name: str):
+    """GuidedMotionPipeline on first use: its latent models are LightningModules, and importing Lightning costs
+    seconds that text-to-motion generation does not need."""
+    if name == "GuidedMotionPipeline":
+        from motiondiff.pipelines.guided import GuidedMotionPipeline
+
+        return GuidedMotionPipeline
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = ["GuidedMotionPipeline", "MotionOutput", "MotionPipeline", "resolve_model"]

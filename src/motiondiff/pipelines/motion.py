@@ -27,7 +27,6 @@ from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.errors import UsageError
 from motiondiff.hardware import inference_precision
 from motiondiff.lit.conditions import check_action, generation_frames, repeated
-from motiondiff.lit.diffusion import SAMPLER_STEPS
 from motiondiff.lit.generation import (
     MAX_LONG_SAMPLES,
     check_num_samples,
@@ -37,6 +36,7 @@ from motiondiff.lit.generation import (
     sampling_precision,
 )
 from motiondiff.lit.loading import load_model
+from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
 from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
 from motiondiff.pipelines.output import MotionOutput
 from motiondiff.prompt_text import check_text

@@ -109,8 +109,8 @@ def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tupl
     """A conditioned model's samples of its ∅ condition (classifier-free guidance's unconditional half), made and
     decoded as the pipeline makes its motions."""
     from motiondiff.edit.smoothing import smooth_joints
-    from motiondiff.lit.diffusion import SAMPLER_STEPS
     from motiondiff.lit.generation import fitted_steps, generate_features
+    from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
 
     model = pipe.model
     frames = torch.full((n,), round(seconds * pipe.fps))

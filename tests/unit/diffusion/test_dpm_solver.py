@@ -165,7 +165,7 @@ def test_edits_accept_dpmpp_but_not_its_resampling(module):
 
 def test_sampler_config_matches_the_module_default():
     from motiondiff.cli.common import REPO_DIR
-    from motiondiff.lit.diffusion import SAMPLER_STEPS
+    from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
 
     with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
         cfg = compose("sample", overrides=["sampler=dpmpp"])
