@@ -19,7 +19,6 @@ joint to float precision. Vectorised over frames; the loop runs over joints only
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import lfilter
 
 from motiondiff.rotations import (
     axis_angle_to_quat,
@@ -136,6 +135,8 @@ def _continuous_twist(swing: np.ndarray, axis: np.ndarray, half_life: float) -> 
     if len(swing) > 1:
         beta[1:] = qtwist_angle(qmul(qinv(swing[:-1]), swing[1:]), axis)
     lam = 0.5 ** (1.0 / half_life)
+    from scipy.signal import lfilter  # here: scipy.signal takes about a second to import, and only this needs it
+
     alpha = lfilter([1.0], [1.0, -lam], -beta)
     return axis_angle_to_quat(np.broadcast_to(axis, swing[..., 1:].shape), alpha)
 

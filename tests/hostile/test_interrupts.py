@@ -16,6 +16,12 @@ def start(tmp, name, *args):
     return popen_cli(tmp, name, *args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
+def _as_at_a_terminal() -> None:
+    """Ctrl-C's default action in the command, as at a terminal: a suite started in the background (``make test &``,
+    nohup) ignores SIGINT, its children inherit that, and Python then installs no KeyboardInterrupt handler."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def wait_for(predicate, timeout=120.0):
     deadline = time.time() + timeout
     while time.time() < deadline:
@@ -33,7 +39,7 @@ def test_ctrl_c_while_sampling_is_one_line_exit_130_and_leaves_no_folder(tmp_pat
     with stderr.open("w") as err_file:
         proc = popen_cli(tmp_path, "sample", "checkpoint=shipped", "prompts_file=prompts.txt", "length=1",
                          "export=bvh", env={"PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE, stderr=err_file,
-                         text=True)  # fmt: skip
+                         text=True, preexec_fn=_as_at_a_terminal)  # fmt: skip
         seen = []
         try:
             for line in proc.stdout:
