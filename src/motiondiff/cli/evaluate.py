@@ -150,7 +150,11 @@ def evaluate(
                 values["multimodality"] = _multimodality(cfg, module, evaluators, test, captions, mm_n, seed,
                                                          bar, sampling, timings)  # fmt: skip
             reps["Model"].append(values)
-    rows = {name: report.summarise(values) for name, values in reps.items()}
+    try:
+        rows = {name: report.summarise(values) for name, values in reps.items()}
+    except ValueError as err:  # a NaN or infinite metric (e.g. a degenerate covariance): one line, no table
+        raise UsageError(f"{err}; nothing was written: look at the model's samples (sample.py), or evaluate more "
+                         "motions per replication (a larger test split or replications=)") from None  # fmt: skip
     return rows, reps, timings
 
 

@@ -81,11 +81,10 @@ def summarise(replications: list[dict[str, float]]) -> Summary:
             values.setdefault(name, []).append(float(value))
     summary: Summary = {}
     for name, vals in values.items():
-        try:
-            mean, ci = mean_ci(vals)
-        except ValueError as err:
-            raise ValueError(f"metric {name!r}: {err}") from err
-        summary[name] = (mean, ci, len(vals))
+        bad = sum(not math.isfinite(v) for v in vals)
+        if bad:
+            raise ValueError(f"metric {name!r} is NaN or infinite in {bad} of {len(vals)} replication(s)")
+        summary[name] = (*mean_ci(vals), len(vals))
     return summary
 
 
