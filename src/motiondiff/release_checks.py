@@ -95,12 +95,12 @@ def _no_constant(name: str):
     raise ValueError(f"{name} is not a number JSON allows")
 
 
-def check_weights_checksum(weights: Path, config: Path, expected: str) -> None:
+def check_weights_checksum(weights: Path, config: Path, expected: str, fix: str = RESTORE) -> None:
     """Refuse a weights file whose SHA-256 differs from the one its JSON records (one flipped bit is enough)."""
     actual = sha256_of(weights)
     if actual != expected:
         raise UsageError(f"release weights {weights} do not match the weights_sha256 in {config.name} (sha256 "
-                         f"{actual[:12]}..., expected {expected[:12]}...): the file is corrupt or changed; {RESTORE}")  # fmt: skip
+                         f"{actual[:12]}..., expected {expected[:12]}...): the file is corrupt or changed; {fix}")  # fmt: skip
 
 
 def check_release_meta(meta: dict, config: Path, hparams: bool = True) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import pickle
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 import torch
 from fixtures.official_layouts import layout_shapes, write_glove
 
+from motiondiff.errors import UsageError
 from motiondiff.models.evaluators.networks import (
     ActionClassifierGRU,
     TextMotionEvaluator,
@@ -119,6 +121,20 @@ def test_released_evaluators_round_trip(tmp_path):
     assert not list(tmp_path.glob("*.tmp"))
     with pytest.raises(FileNotFoundError, match="train_evaluator"):
         load_released(tmp_path / "missing")
+
+
+def test_a_changed_or_unchecked_evaluator_release_is_refused(tmp_path):
+    save_released(ActionClassifierGRU(66, 16, 2, 5).eval(), tmp_path / "action")
+    weights, config = tmp_path / "action.safetensors", tmp_path / "action.json"
+    data = bytearray(weights.read_bytes())
+    data[-5] ^= 0x01  # one bit of a weight
+    weights.write_bytes(bytes(data))
+    with pytest.raises(UsageError, match="weights_sha256"):
+        load_released(tmp_path / "action")
+    doc = json.loads(config.read_text())
+    config.write_text(json.dumps({k: v for k, v in doc.items() if k != "weights_sha256"}))
+    with pytest.raises(UsageError, match="records no weights_sha256"):
+        load_released(tmp_path / "action")
 
 
 def test_motion_encoding_ignores_padding():

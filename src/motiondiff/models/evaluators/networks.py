@@ -15,7 +15,6 @@ Evaluators trained on our own datasets (`python -m motiondiff.cli.train_evaluato
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +24,10 @@ from torch import nn
 from torch.nn.utils.rnn import pack_padded_sequence
 
 from motiondiff.atomic import atomic_write, write_json
+from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.data.representations.hml_features import feature_slices, joints_from_features, recover_root
+from motiondiff.errors import UsageError
+from motiondiff.release_checks import check_weights_checksum, read_release_json, sha256_of
 from motiondiff.text.word_vectors import POS_CATEGORIES, Vocabulary, load_glove, sequence, tag_captions
 
 FOOT_CONTACT_DIMS = 4
@@ -283,10 +285,12 @@ def motion_input(classifier: ActionClassifierGRU, features: torch.Tensor, num_jo
 
 # ---- released evaluators: safetensors + JSON config -------------------------------------------------------------
 _KINDS = {"text_motion": TextMotionEvaluator, "action": ActionClassifierGRU}
+EVALUATOR_FIX = "restore the shipped evaluators (`git checkout -- checkpoints`) or rebuild them with `python -m motiondiff.cli.train_evaluator`"
 
 
 def save_released(model: nn.Module, path: str | Path, meta: dict | None = None) -> Path:
-    """`<path>.safetensors` (weights) and `<path>.json` (kind, constructor config, vocabulary, provenance)."""
+    """`<path>.safetensors` (weights) and `<path>.json` (kind, constructor config, vocabulary, provenance, and the
+    weights' SHA-256, checked on load)."""
     path = Path(path)
     kind = next(k for k, cls in _KINDS.items() if isinstance(model, cls))
     config = dict(model.config)
@@ -294,21 +298,35 @@ def save_released(model: nn.Module, path: str | Path, meta: dict | None = None) 
         config["words"] = model.words
     state = {k: v.detach().contiguous().cpu() for k, v in model.state_dict().items()}
     atomic_write(path.with_suffix(".safetensors"), lambda tmp: save_file(state, tmp))
-    doc = {"kind": kind, "config": config, "meta": meta or {}}
+    doc = {
+        "kind": kind,
+        "config": config,
+        "meta": meta or {},
+        "weights_sha256": sha256_of(path.with_suffix(".safetensors")),
+    }
     write_json(path.with_suffix(".json"), doc)
     return path.with_suffix(".safetensors")
 
 
 def load_released(path: str | Path) -> tuple[nn.Module, dict]:
-    """A released evaluator (no pickle anywhere) -> (model in eval mode, meta)."""
+    """A released evaluator (no pickle anywhere) -> (model in eval mode, meta). A file that is not one, was changed
+    after release (its weights_sha256) or holds NaN weights is one UsageError: its scores would be meaningless."""
     path = Path(path)
     weights, config_file = path.with_suffix(".safetensors"), path.with_suffix(".json")
     for p in (weights, config_file):
         if not p.is_file():
-            raise FileNotFoundError(
-                f"{p} not found: rebuild the evaluators with `python -m motiondiff.cli.train_evaluator`"
-            )
-    doc = json.loads(config_file.read_text())
-    model = _KINDS[doc["kind"]](**doc["config"])
-    model.load_state_dict(load_file(weights), strict=True)
+            raise FileNotFoundError(f"{p} not found: {EVALUATOR_FIX}")
+    doc = read_release_json(config_file)
+    if doc.get("kind") not in _KINDS or not isinstance(doc.get("config"), dict):
+        raise UsageError(f"evaluator config {config_file} is not a released evaluator (kind {doc.get('kind')!r}, one "
+                         f"of {', '.join(_KINDS)}, and a config object); {EVALUATOR_FIX}")  # fmt: skip
+    if not isinstance(doc.get("weights_sha256"), str):
+        raise UsageError(f"evaluator config {config_file} records no weights_sha256 (released before checksums); "
+                         f"{EVALUATOR_FIX}")  # fmt: skip
+    check_weights_checksum(weights, config_file, doc["weights_sha256"], EVALUATOR_FIX)
+    with reading(weights, "evaluator weights", EVALUATOR_FIX):
+        state = load_file(weights)
+        check_finite_state(state, f"evaluator weights {weights}", EVALUATOR_FIX)
+        model = _KINDS[doc["kind"]](**doc["config"])
+        model.load_state_dict(state, strict=True)
     return model.eval(), doc.get("meta", {})
