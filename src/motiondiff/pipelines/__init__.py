@@ -19,4 +19,5 @@ def __getattr__(name: str):
         return GuidedMotionPipeline
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
+
 __all__ = ["GuidedMotionPipeline", "MotionOutput", "MotionPipeline", "resolve_model"]

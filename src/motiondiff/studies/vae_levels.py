@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.checked_loading import torch_load
 from motiondiff.errors import UsageError
 from motiondiff.eval import report
 from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_metrics
@@ -49,7 +50,7 @@ def load_vae(path: Path) -> tuple[MotionVAEModule, dict]:
     """The module (eval mode) and what the report needs from the checkpoint and its run's run.json."""
     if not path.is_file():
         raise UsageError(f"checkpoint {path} not found; pass <level>=<path to a train_vae.py .ckpt>")
-    ckpt = torch.load(path, map_location="cpu", weights_only=True)  # no pickled code runs
+    ckpt = torch_load(path, "VAE checkpoint", "pass the .ckpt train_vae.py wrote")  # no pickled code runs
     module = MotionVAEModule(**ckpt["hyper_parameters"])
     module.load_state_dict(ckpt["state_dict"])
     run_json = path.parent.parent / "run.json"

@@ -22,6 +22,7 @@ import numpy as np
 import torch
 
 from motiondiff.atomic import finite_or_null, write_json
+from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.errors import UsageError
 from motiondiff.eval.report import mean_ci
 from motiondiff.lit.conditions import text_encoder_kwargs
@@ -30,6 +31,8 @@ from motiondiff.paths import REPO_DIR, find_checkpoint
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "weight_control"
 MOVING = ("walk", "run", "dash", "jog", "step")
 FRAMES = 160  # 8 s at 20 fps: long enough for three local actions, within the complex split's 150-196 frames
+
+LATENT_FIX = "give the .ckpt that train_latent.py wrote"
 
 
 def guided_index(texts: list[str]) -> int:
@@ -165,7 +168,9 @@ def main(argv: list[str] | None = None) -> int:
     if len(cfg.level_steps) != 3:
         raise UsageError(f"level_steps must be three numbers [motion, action, specific], got {list(cfg.level_steps)}")
     ckpt = Path(cfg.checkpoint)
-    module = HierarchicalLatentModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
+    with reading(ckpt, "latent checkpoint", LATENT_FIX):
+        module = HierarchicalLatentModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
+    check_finite_state(module.state_dict(), f"latent checkpoint {ckpt}", LATENT_FIX)
     mdm = load_module(find_checkpoint(cfg.local_model, REPO_DIR / "outputs"))
     encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
     data = Path(cfg.data or REPO_DIR / "data" / "bandai_mini_compositional")

@@ -24,7 +24,7 @@ from torch import nn
 from torch.nn.utils.rnn import pack_padded_sequence
 
 from motiondiff.atomic import atomic_write, write_json
-from motiondiff.checked_loading import check_finite_state, reading
+from motiondiff.checked_loading import check_finite_state, reading, torch_load
 from motiondiff.data.representations.hml_features import feature_slices, joints_from_features, recover_root
 from motiondiff.errors import UsageError
 from motiondiff.release_checks import check_weights_checksum, read_release_json, sha256_of
@@ -197,7 +197,7 @@ def load_official_t2m_evaluator(
     vocab, vectors = load_glove(glove_dir)
     model = TextMotionEvaluator(dims[dataset], vocab.words, word_dim=vectors.shape[1], learned_words=False)
     model.word_vectors.weight.data.copy_(torch.from_numpy(vectors))
-    state = torch.load(checkpoint, map_location="cpu", weights_only=True)
+    state = torch_load(checkpoint, "official evaluator", "give the official text_mot_match/model/finest.tar")
     for name in ("movement_encoder", "text_encoder", "motion_encoder"):
         if name not in state:
             raise KeyError(f"{checkpoint} has no {name!r}: is it the text_mot_match finest.tar?")
@@ -238,8 +238,8 @@ class ActionClassifierGRU(nn.Module):
 
 def load_official_action_classifier(path: str | Path) -> ActionClassifierGRU:
     """The official HumanAct12 classifier (`action_recognition_model_humanact12.tar`; keys model/optimizer/...)."""
-    state = torch.load(path, map_location="cpu", weights_only=True)
-    weights = state.get("model", state) if isinstance(state, dict) else state
+    state = torch_load(path, "official action classifier", "give action_recognition_model_humanact12.tar")
+    weights = state.get("model", state)
     model = ActionClassifierGRU(
         input_size=weights["recurrent.weight_ih_l0"].shape[1],
         hidden_size=weights["recurrent.weight_hh_l0"].shape[1],

@@ -20,6 +20,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from motiondiff.checked_loading import torch_load
 from motiondiff.skeleton import SMPL24
 
 TEMPORAL_KERNEL = 9
@@ -145,8 +146,8 @@ class STGCNRecognition(nn.Module):
 
 def load_official_uestc_recognition(path) -> STGCNRecognition:
     """The released UESTC recognition model (`uestc_rot6d_stgcn.tar`: a bare state dict, or one under "model")."""
-    state = torch.load(path, map_location="cpu", weights_only=True)
-    state = state.get("model", state) if isinstance(state, dict) else state
+    state = torch_load(path, "official UESTC recognition model", "give uestc_rot6d_stgcn.tar")
+    state = state.get("model", state)
     if "fcn.weight" not in state or "data_bn.weight" not in state:
         raise KeyError(f"{path} has no fcn/data_bn weights: is it ACTOR's uestc_rot6d_stgcn.tar?")
     joints = state["A"].shape[1] if "A" in state else 24
