@@ -13,7 +13,20 @@ TINY = ["model.d_model=32", "model.num_layers=1", "model.num_heads=2", "model.ff
         "trainer.log_every_n_steps=1"]  # fmt: skip
 
 
+# The caption-feature cache (text/cache.py: values keyed by encoder and caption, written atomically) is shared by
+# every run of a session, as a user's runs share it; the rest of each run's cache stays its own. Set by conftest.py.
+SHARED_TEXT_CACHE = "MOTIONDIFF_TEST_TEXT_CACHE"
+
+
+def _link_text_cache(cache_dir: Path) -> None:
+    shared = os.environ.get(SHARED_TEXT_CACHE)
+    if shared and not (cache_dir / "text").exists():
+        cache_dir.mkdir(parents=True, exist_ok=True)
+        (cache_dir / "text").symlink_to(shared, target_is_directory=True)
+
+
 def run_cli(script: str, *overrides: str, env_dir: Path, check: bool = True, timeout: int = 300):
+    _link_text_cache(env_dir / "cache")
     env = {
         **os.environ,
         "MOTIONDIFF_OUTPUT_DIR": str(env_dir / "outputs"),

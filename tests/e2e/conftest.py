@@ -2,10 +2,21 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
-from cli_helpers import train_tiny
+from cli_helpers import SHARED_TEXT_CACHE, train_tiny
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _shared_text_cache(tmp_path_factory):
+    """One caption-feature cache for the session's runs (both xdist workers': the folder above their own temp)."""
+    base = tmp_path_factory.getbasetemp()
+    folder = (base.parent if base.name.startswith("popen-gw") else base) / "shared-text-cache"
+    folder.mkdir(parents=True, exist_ok=True)
+    os.environ[SHARED_TEXT_CACHE] = str(folder)
+    yield
 
 
 @pytest.fixture(scope="session")

@@ -1,8 +1,9 @@
 """Caption -> feature cache, so the frozen text encoder runs once per caption and never inside a training step.
 
 On disk (optional): `<cache_dir>/<encoder.name>.safetensors` holds the (K, dim) float32 tensor "embeddings" and
-`<encoder.name>.json` the K captions in row order plus the encoder name and dim. Each file is written to a temporary
-file and renamed, so a crash never leaves a half-written file.
+`<encoder.name>.json` the K captions in row order plus the encoder name and dim (the tensor file's metadata holds them
+too, so features and captions are replaced together). Each file is written to a temporary file and renamed, so a
+crash never leaves a half-written file, and runs sharing the cache only ever lose entries to each other, never mix them.
 """
 
 from __future__ import annotations
@@ -12,8 +13,8 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import torch
-from safetensors import SafetensorError
-from safetensors.torch import load_file, save_file
+from safetensors import SafetensorError, safe_open
+from safetensors.torch import save_file
 from torch import Tensor
 
 from motiondiff.atomic import atomic_write
@@ -92,13 +93,15 @@ class TextEmbeddingCache:
         directory.mkdir(parents=True, exist_ok=True)
         texts = sorted(self._index, key=self._index.__getitem__)
         meta = {"encoder": self.encoder.name, "dim": self.encoder.dim, "texts": texts}
-        # Tensor first, texts second: the loader checks that both agree, so an interrupted pair is detected.
+        # The captions ride in the tensor file's own metadata, so one atomic rename replaces features and captions
+        # together: runs sharing a cache (two trainings at once) never read one run's features with another's
+        # captions. The JSON beside it is the same list, for people.
         atomic_write(
             self.tensor_path,
             lambda tmp: save_file(
                 {_TENSOR_KEY: self._matrix.contiguous()},
                 tmp,
-                metadata={"encoder": self.encoder.name, "dim": str(self.encoder.dim)},
+                metadata={"encoder": self.encoder.name, "dim": str(self.encoder.dim), "texts": json.dumps(texts)},
             ),
         )
         atomic_write(self.texts_path, lambda tmp: Path(tmp).write_text(json.dumps(meta, ensure_ascii=False)))
@@ -106,8 +109,16 @@ class TextEmbeddingCache:
     def _load(self) -> None:
         fix = f"delete {self.tensor_path} and {self.texts_path} to rebuild the cache"
         try:
-            matrix = load_file(self.tensor_path)[_TENSOR_KEY]
-            meta = json.loads(self.texts_path.read_text())
+            with safe_open(str(self.tensor_path), framework="pt") as f:
+                matrix, meta = f.get_tensor(_TENSOR_KEY), dict(f.metadata() or {})
+            if "texts" in meta:  # one file: features and captions from the same write
+                meta = {
+                    "encoder": meta.get("encoder"),
+                    "dim": int(meta.get("dim", -1)),
+                    "texts": json.loads(meta["texts"]),
+                }
+            else:  # written before the captions moved into the tensor file
+                meta = json.loads(self.texts_path.read_text())
             texts = meta["texts"]
         except (
             OSError,

@@ -10,7 +10,7 @@ import pytest
 import torch
 import yaml
 
-from motiondiff.lit.diffusion import _backbone_kwargs
+from motiondiff.lit.motion_diffusion import _backbone_kwargs
 from motiondiff.models import BACKBONES, MDMDenoiser, build_backbone, build_condition, count_parameters
 from motiondiff.models.backbones import GRUBackbone, TransDecBackbone, UNetBackbone
 

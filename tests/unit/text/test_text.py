@@ -114,9 +114,26 @@ def test_cache_rejects_foreign_or_corrupt_files(minilm, tmp_path):
     TextEmbeddingCache(minilm, tmp_path).precompute(["walk"])
     with pytest.raises(ValueError, match="dim 384"):
         TextEmbeddingCache(CountingEncoder(minilm, dim=512), tmp_path)  # same name, other dim
-    (tmp_path / f"{minilm.name}.json").write_text("{not json")
+    (tmp_path / f"{minilm.name}.json").write_text("{not json")  # the captions are read from the tensor file
+    assert len(TextEmbeddingCache(minilm, tmp_path)) == 1
+    tensor = tmp_path / f"{minilm.name}.safetensors"
+    tensor.write_bytes(tensor.read_bytes()[:40])
     with pytest.raises(ValueError, match="delete"):
         TextEmbeddingCache(minilm, tmp_path)
+
+
+def test_runs_sharing_a_cache_never_mix_features_and_captions(minilm, tmp_path):
+    """Two runs that started from the same cache and each added other captions: the file left is one run's whole
+    write, so every caption still maps to its own features (the other run's captions are only missing)."""
+    TextEmbeddingCache(minilm, tmp_path).precompute(["walk"])
+    first, second = TextEmbeddingCache(minilm, tmp_path), TextEmbeddingCache(minilm, tmp_path)
+    first.precompute(["run"])
+    first_json = (tmp_path / f"{minilm.name}.json").read_text()
+    second.precompute(["jump"])  # saved last: its tensor and captions replace the first run's together
+    (tmp_path / f"{minilm.name}.json").write_text(first_json)  # the two writes interleaved: the other run's list
+    reloaded = TextEmbeddingCache(minilm, tmp_path)
+    assert sorted(reloaded._index) == ["jump", "walk"]
+    assert torch.allclose(reloaded.embed(["jump"]), minilm.encode(["jump"]), atol=1e-5)
 
 
 def test_cache_in_memory_only(minilm):
