@@ -82,10 +82,16 @@ def run_collected(request, tmp_path_factory, workers: int = 2) -> dict[str, tupl
     wanted = [item.callspec.params["case"] for item in request.session.items
               if item.module is request.module and hasattr(item, "callspec") and "case" in item.callspec.params]  # fmt: skip
 
-    def run(case: Hostile):
+    def prepared(case: Hostile) -> tuple[Hostile, Path, tuple[str, ...]]:
         tmp = tmp_path_factory.mktemp(case.name)
-        extra = case.setup(tmp) if case.setup else ()
+        return case, tmp, case.setup(tmp) if case.setup else ()
+
+    def run(item: tuple[Hostile, Path, tuple[str, ...]]):
+        case, tmp, extra = item
         return case.name, (run_cli(tmp, case.command, *case.args, *extra, env=case.env), tmp)
 
+    # The setups run here, one after another: CPython 3.11's parser is not thread-safe (np.load parses .npy headers
+    # with ast.literal_eval, and two threads at once raise "AST constructor recursion depth mismatch").
+    items = [prepared(case) for case in wanted]
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        return dict(pool.map(run, wanted))
+        return dict(pool.map(run, items))

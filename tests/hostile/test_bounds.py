@@ -176,12 +176,15 @@ MEASURED = {  # name: (case, refused)
 @pytest.fixture(scope="module")
 def measured(tmp_path_factory) -> dict:
     def run(item):
-        name, (case, _) = item
-        tmp = tmp_path_factory.mktemp(name)
-        return name, (*run_measured(tmp, case.command, *case.args, *case.setup(tmp)), tmp)
+        name, (case, _), tmp, extra = item
+        return name, (*run_measured(tmp, case.command, *case.args, *extra), tmp)
 
+    items = []  # the setups one after another (see hostile_cli.run_collected: the parser is not thread-safe)
+    for name, (case, refused) in MEASURED.items():
+        tmp = tmp_path_factory.mktemp(name)
+        items.append((name, (case, refused), tmp, case.setup(tmp)))
     with ThreadPoolExecutor(max_workers=2) as pool:
-        return dict(pool.map(run, MEASURED.items()))
+        return dict(pool.map(run, items))
 
 
 def _assert_nothing_left(tmp: Path) -> None:

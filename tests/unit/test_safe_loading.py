@@ -80,7 +80,7 @@ def test_vae_and_latent_loaders_refuse_a_crafted_checkpoint(crafted):
 def test_official_evaluator_loader_refuses_a_crafted_checkpoint(crafted):
     from motiondiff.models.evaluators.networks import load_official_action_classifier
 
-    _refused(load_official_action_classifier, *crafted, one_line=False)
+    _refused(load_official_action_classifier, *crafted)
 
 
 def test_a_pickle_named_safetensors_is_not_unpickled(crafted, tmp_path):

@@ -224,9 +224,8 @@ def main(argv: list[str] | None = None) -> int:
     latent_path = Path(cfg.latent)
     mdm_path = find_checkpoint(cfg.mdm, REPO_DIR / "outputs")
     with reading(latent_path, "latent checkpoint", LATENT_FIX):
-        latent = HierarchicalLatentModule.load_from_checkpoint(
-            latent_path, map_location="cpu", weights_only=True
-        ).eval()
+        latent = HierarchicalLatentModule.load_from_checkpoint(latent_path, map_location="cpu", weights_only=True)
+    latent.eval()
     check_finite_state(latent.state_dict(), f"latent checkpoint {latent_path}", LATENT_FIX)
     mdm = load_module(mdm_path)
     local_path = find_checkpoint(cfg.local_model or str(mdm_path), REPO_DIR / "outputs")
