@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motiondiff.checked_loading import check_finite_state, torch_load
+from motiondiff.checked_loading import CKPT_FIX, check_finite_state, torch_load
+from motiondiff.errors import UsageError
 from motiondiff.paths import RELEASE_SUFFIXES
 from motiondiff.release_checks import check_release_files
 
@@ -16,8 +17,16 @@ def check_model_file(path: str | Path) -> None:
     path = Path(path)
     if path.suffix in RELEASE_SUFFIXES:
         check_release_files(path)
-        return
+    else:
+        checkpoint_state(path)
+
+
+def checkpoint_state(path: str | Path) -> dict:
+    """A motion model's training checkpoint read safely: its hyper_parameters and finite state_dict, or one
+    UsageError (what `lit.loading.load_model` builds the model from)."""
     state = torch_load(path)
-    weights = state.get("state_dict")
-    if isinstance(weights, dict):
-        check_finite_state(weights, f"checkpoint {path}")
+    if not isinstance(state.get("hyper_parameters"), dict) or not isinstance(state.get("state_dict"), dict):
+        raise UsageError(f"checkpoint {path} has no hyper_parameters or state_dict: it is not a motion model's "
+                         f"training checkpoint; {CKPT_FIX}")  # fmt: skip
+    check_finite_state(state["state_dict"], f"checkpoint {path}")
+    return state

@@ -39,7 +39,7 @@ def read_prompts_file(path: str | Path) -> list[str]:
 def check_prompt_inputs(cfg: DictConfig) -> None:
     """Every check of the prompts that needs no model (the model's own checks follow once it is loaded)."""
     check_one_source(cfg)
-    plain, seconds = split_timed(cfg)
+    plain, _ = split_timed(cfg)
     if plain.get("prompts_file") is not None:
         texts = read_prompts_file(plain.prompts_file)
     elif plain.get("prompts") is not None:
@@ -77,7 +77,7 @@ def split_timed(cfg: DictConfig) -> tuple[DictConfig, list[float] | None]:
     """The config with timed prompts=/prompts_file=/action= items reduced to their texts, and their seconds (None:
     untimed, the config as given). text= is one prompt and never timed."""
     key = next((k for k in ("prompts", "prompts_file", "action") if cfg[k] is not None), None)
-    if key is None or sum(cfg[k] is not None for k in ("text", "prompts", "prompts_file", "action")) > 1:
+    if key is None or sum(cfg[k] is not None for k in SOURCES) > 1:
         return cfg, None  # nothing to parse, or a conflict that collect_prompts reports
     if key == "prompts_file":
         items = read_prompts_file(cfg.prompts_file)

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motiondiff.checked_loading import CKPT_FIX, check_finite_state, check_same_shapes, reading, torch_load
-from motiondiff.errors import UsageError
+from motiondiff.checked_loading import CKPT_FIX, check_same_shapes, reading
 from motiondiff.lit.motion_diffusion import MotionDiffusion
+from motiondiff.model_file_checks import checkpoint_state
 from motiondiff.paths import RELEASE_SUFFIXES
 from motiondiff.release import load_release
 
@@ -17,12 +17,8 @@ def load_model(path: str | Path, device: str = "cpu") -> MotionDiffusion:
     plain `MotionDiffusion` (generation needs no Lightning; `MotionDiffusionModule.load_from_checkpoint` trains on)."""
     if Path(path).suffix in RELEASE_SUFFIXES:
         return load_release(path, device)
-    state = torch_load(path)
-    weights = state.get("state_dict")
-    if not isinstance(state.get("hyper_parameters"), dict) or not isinstance(weights, dict):
-        raise UsageError(f"checkpoint {path} has no hyper_parameters or state_dict: it is not a motion model's "
-                         f"training checkpoint; {CKPT_FIX}")  # fmt: skip
-    check_finite_state(weights, f"checkpoint {path}")
+    state = checkpoint_state(path)
+    weights = state["state_dict"]
     with reading(path, "checkpoint"):
         module = MotionDiffusion(**state["hyper_parameters"])
     check_same_shapes(
