@@ -15,6 +15,7 @@ import re
 from pathlib import Path
 
 from motiondiff.errors import UsageError
+from motiondiff.paths import RELEASE_SUFFIXES
 
 FORMAT = "motiondiff-release-1"
 MODEL_CLASS = "MotionDiffusionModule"  # the class a release names (loaded as lit.motion_diffusion.MotionDiffusion)
@@ -28,15 +29,15 @@ RESTORE = "restore the release (`git checkout -- checkpoints` for a shipped one)
 def release_paths(path: str | Path) -> tuple[Path, Path]:
     """(weights, config) of a release named by either file or their common stem."""
     stem = Path(path)
-    if stem.suffix in (".safetensors", ".json"):
+    if stem.suffix in RELEASE_SUFFIXES:
         stem = stem.with_suffix("")
     return stem.with_suffix(".safetensors"), stem.with_suffix(".json")
 
 
-def check_release_files(path: str | Path) -> None:
+def check_release_files(path: str | Path) -> dict:
     """The checks of a release that need no model and no torch (its files, the JSON's top level, the checksum,
     finite weights): a command runs them before its heavy imports, so a broken release is refused in a second.
-    Loading (``release.load_release``) checks all of it again, and the hyper-parameters and shapes too."""
+    Returns the JSON, which loading (``release.load_release``) goes on to check in full, with the shapes."""
     weights, config = release_paths(path)
     for f in (weights, config):
         if not f.is_file():
@@ -54,6 +55,7 @@ def check_release_files(path: str | Path) -> None:
     if bad:
         raise UsageError(f"release weights {weights} holds NaN or infinite weights ({len(bad)} tensor(s), first "
                          f"{bad[0]!r}): the weights are corrupt or diverged; {RESTORE}")  # fmt: skip
+    return meta
 
 
 def _numpy_float(f, key: str) -> bool:
