@@ -20,8 +20,10 @@ from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.formats.prepared import PreparedSplit
 from motiondiff.data.formats.prepared import load_split as load_prepared_split
 from motiondiff.data.loaders import motion_loader
+from motiondiff.data.mirror import with_mirrors
 from motiondiff.data.representations import Representation, get_representation
 from motiondiff.data.representations.clip import ClipSplit, LabelledClip
+from motiondiff.data.representations.hml_features import mean_std
 from motiondiff.data.representations.spec import HMLBridge, bridge_from_spec, representation_spec
 from motiondiff.data.sources.humanml3d import HUMANML3D, KIT, OfficialLayout, load_official_split
 from motiondiff.skeleton import SMPL22
@@ -29,6 +31,7 @@ from motiondiff.skeleton import SMPL22
 log = logging.getLogger(__name__)
 
 SplitData = tuple[list[MotionRecord], np.ndarray, np.ndarray]
+MIRRORED_REPRESENTATIONS = ("hml263", "kit251")  # features whose mirror is a signed permutation (data.mirror)
 _STAGE_SPLITS = {"fit": ("train", "val"), "validate": ("val",), "test": ("test",), "predict": ("test",)}
 
 
@@ -39,6 +42,8 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
     Mean/Std); val/test are normalised with them, and a split that returns different statistics is an error.
     `bucketing`: training batches of similar-length clips, sorted in chunks of `bucket_chunk` batches
     (`motiondiff.data.bucketing`); far less padding where clip lengths vary.
+    `mirror`: the train split also holds every clip's left-right mirror image (`motiondiff.data.mirror`), and
+    Mean/Std are those of the doubled train split, as HumanML3D's; val and test stay the real clips.
     """
 
     def __init__(
@@ -52,8 +57,11 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         window_min_frames: int | None = None,
         bucketing: bool = False,
         bucket_chunk: int = 64,
+        mirror: bool = False,
     ):
         super().__init__()
+        self.mirror = bool(mirror)
+        self._mirror_stats: tuple[np.ndarray, np.ndarray] | None = None
         self.bucketing, self.bucket_chunk = bool(bucketing), int(bucket_chunk)
         self.window_min_frames = window_min_frames  # random training-window lengths: MotionDataset
         self.balance = float(balance)  # class-balanced training order: resumable.balance_weights
@@ -111,10 +119,21 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         elif not (np.array_equal(self._mean, mean) and np.array_equal(self._std, std)):
             raise ValueError(f"{type(self).__name__}: split {split!r} returned other Mean/Std than the first")
 
+    def mirror_label_names(self) -> list[str]:
+        """Action names whose left/right images swap under `mirror` (none for caption-only datasets)."""
+        return []
+
     def dataset(self, split: str) -> MotionDataset:
         """The MotionDataset of a split, loaded once."""
         if split not in self.datasets:
+            if self.mirror and split != "train":
+                self.dataset("train")  # the statistics are the doubled train split's
             records, mean, std = self.load_split(split)
+            if self.mirror:
+                if split == "train":
+                    records = with_mirrors(records, self.mirror_label_names())
+                    self._mirror_stats = mean_std(np.concatenate([r.motion for r in records]))
+                mean, std = self._mirror_stats
             self._set_stats(split, mean, std)
             self.datasets[split] = MotionDataset(
                 records,
@@ -230,11 +249,17 @@ class ClipDataModule(MotionDataModule, abc.ABC):
         window_min_frames: int | None = None,
         bucketing: bool = False,
         bucket_chunk: int = 64,
+        mirror: bool = False,
     ):
         super().__init__(batch_size, num_workers, max_frames, unit_length, seed, balance, window_min_frames, bucketing,
-                         bucket_chunk)  # fmt: skip
+                         bucket_chunk, mirror)  # fmt: skip
         self.min_frames = min_frames
         self.representation_name = representation or self.default_representation
+        if self.mirror and self.representation_name not in MIRRORED_REPRESENTATIONS:
+            raise ValueError(
+                f"mirror=true reflects HumanML3D/KIT-ML features; representation={self.representation_name} has no "
+                f"mirror here: use representation=hml263 (or kit251), or mirror=false"
+            )
         self._splits: dict[str, ClipSplit] = {}
         self._rep: Representation | None = None
         self._train_features: list[np.ndarray] | None = None
@@ -312,6 +337,9 @@ class ClipDataModule(MotionDataModule, abc.ABC):
     def action_names(self) -> list[str]:
         return list(self.clips("train").action_names)
 
+    def mirror_label_names(self) -> list[str]:
+        return self.action_names
+
 
 class PreparedDataModule(ClipDataModule):
     """A folder written by `python -m motiondiff.data.preparing.prepare` (Bandai, the embedded bandai_mini, BVH folders).
@@ -337,9 +365,10 @@ class PreparedDataModule(ClipDataModule):
         window_min_frames: int | None = None,
         bucketing: bool = False,
         bucket_chunk: int = 64,
+        mirror: bool = False,
     ):
         super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation, balance,
-                         window_min_frames, bucketing, bucket_chunk)  # fmt: skip
+                         window_min_frames, bucketing, bucket_chunk, mirror)  # fmt: skip
         self.root = Path(root)
         self.meta: dict = {}
         self._prepared: dict[str, PreparedSplit] = {}

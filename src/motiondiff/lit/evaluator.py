@@ -12,7 +12,6 @@ Both keep the weights of their best validation epoch (R-precision top-3 / accura
 from __future__ import annotations
 
 import copy
-import re
 
 import lightning as L
 import numpy as np
@@ -20,16 +19,10 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+from motiondiff.data.mirror import mirrored_labels
 from motiondiff.data.representations.hml_features import evaluator_std, skeleton_for_dim
 from motiondiff.eval.metrics import r_precision
 from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, motion_input
-
-
-def mirrored_labels(names: list[str]) -> list[int]:
-    """Index of each label's mirror image: the name with left/right swapped when the dataset has it, else itself."""
-    index = {n: i for i, n in enumerate(names)}
-    swap = {"left": "right", "right": "left"}
-    return [index.get(re.sub(r"left|right", lambda m: swap[m.group()], n), i) for i, n in enumerate(names)]
 
 
 class _BestWeights(L.LightningModule):

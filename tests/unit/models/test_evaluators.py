@@ -183,7 +183,7 @@ def test_pose_and_trajectory_holds_the_world_joints():
 
 
 def test_mirroring_swaps_sides_of_joints_and_labels():
-    from motiondiff.lit.evaluator import mirrored_labels
+    from motiondiff.data.mirror import mirrored_labels
     from motiondiff.skeleton import KIT21, SMPL22
 
     for skel in (SMPL22, KIT21):
