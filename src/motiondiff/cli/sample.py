@@ -10,6 +10,7 @@ ground contacts (`edit.foot_cleanup`)."""
 from __future__ import annotations
 
 import re
+import sys
 from dataclasses import asdict
 from pathlib import Path
 
@@ -47,6 +48,7 @@ from motiondiff.lit.generation import (
 )
 from motiondiff.lit.loading import load_model
 from motiondiff.lit.motion_diffusion import MotionDiffusion
+from motiondiff.pipelines.coverage import far_prompts, load_coverage
 from motiondiff.prompt_text import check_text
 from motiondiff.studies.behaviour import mean_joint_speed
 
@@ -120,6 +122,9 @@ def run(cfg: DictConfig) -> Path:
     module = load_model(ckpt, cfg.device)
     check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"), body)
     prompts = collect_prompts(plain, module)
+    far = [r.warning() for r in far_prompts(module, load_coverage(module, ckpt), prompts)]
+    for line in far:  # one line per far prompt, before the sampling
+        print(f"warning: {line}", file=sys.stderr)
     frames = num_frames(cfg, module) if seconds is None else None
     sigma = smoothing_sigma(cfg, module)
     if cfg.num_samples < 1:
@@ -133,7 +138,7 @@ def run(cfg: DictConfig) -> Path:
     shape = feed_forward_shape(module, int(cfg.num_samples), frames or int(module.hparams.max_frames))
     precision = inference_precision(cfg.get("precision", "auto"), cfg.device, shape)
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "steps": steps,
-               "precision": precision, "clip_x0": module.clip_rule}  # fmt: skip
+               "precision": precision, "clip_x0": module.clip_rule, "coverage_warnings": far}  # fmt: skip
     if seconds is not None:
         with sampling_precision(module, precision):
             summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats,

@@ -91,7 +91,9 @@ def build_demo(
         if local:
             settings += "; local actions: " + ", ".join(f"{a['text']} (weight {a['weight']:g})" for a in local)
         note = glb_note(models.glb, next((s.glb_error for s in samples if s.glb_error), None))
-        return [f"Generated {len(samples)} motion(s) with **{key}** ({settings}). {note}", *_slot_updates(samples)]
+        far = "".join(f"**Warning:** {line}. " for line in out.info.get("coverage_warnings") or [])
+        return [f"{far}Generated {len(samples)} motion(s) with **{key}** ({settings}). {note}",
+                *_slot_updates(samples)]  # fmt: skip
 
     with gr.Blocks(title="motiondiff demo") as demo:
         gr.Markdown("# motiondiff: text and action to human motion\nDescribe a motion (or pick an action), then "

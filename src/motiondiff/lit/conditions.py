@@ -71,25 +71,30 @@ def condition_batch(module, conditions: list):
             raise ValueError("a batch is conditioned or not: give a condition for every motion or for none")
         return None
     if module.condition_kind == "text":
-        from motiondiff.text.encoders import build_text_encoder
-
         index = getattr(module, "text_index", {})
         if index and all(c in index for c in conditions):  # training captions (e.g. the evaluation callback's):
             rows = torch.tensor([index[c] for c in conditions], device=module.text_table.device)
             return module.text_table[rows]  # already prepared; no encoder needed
-        if not hasattr(module, "_encoder"):
-            module._encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
-            module._prompt_features = {}
-        new = [c for c in dict.fromkeys(conditions) if c not in module._prompt_features]
-        if new:
-            module._prompt_features.update(zip(new, module._encoder.encode(new).cpu(), strict=True))
-        rows = torch.stack([module._prompt_features[c] for c in conditions])
-        return module.prepare_text(rows.to(module.device))
+        return module.prepare_text(prompt_features(module, conditions).to(module.device))
     if module.condition_kind == "action":
         names = module.hparams.action_names
         ids = [c if isinstance(c, int | np.integer) else names.index(c) for c in conditions]
         return torch.tensor(ids, dtype=torch.long, device=module.device)
     return None
+
+
+def prompt_features(module, prompts: list[str]) -> torch.Tensor:
+    """The text encoder's features (P, E) of prompts, on the CPU; the encoder loads once and each prompt is encoded
+    once per module (sampling and the coverage check share them)."""
+    from motiondiff.text.encoders import build_text_encoder
+
+    if not hasattr(module, "_encoder"):
+        module._encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
+        module._prompt_features = {}
+    new = [c for c in dict.fromkeys(prompts) if c not in module._prompt_features]
+    if new:
+        module._prompt_features.update(zip(new, module._encoder.encode(new).cpu(), strict=True))
+    return torch.stack([module._prompt_features[c] for c in prompts])
 
 
 def repeated(module, condition, n: int):

@@ -38,6 +38,7 @@ from motiondiff.lit.generation import (
 from motiondiff.lit.loading import load_model
 from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
 from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
+from motiondiff.pipelines.coverage import load_coverage, warn_far
 from motiondiff.pipelines.output import MotionOutput
 from motiondiff.prompt_text import check_text
 
@@ -66,6 +67,8 @@ class MotionPipeline:
     def __init__(self, model, source: str = "", precision: str = "auto"):
         self.model = model.eval()
         self.source = source
+        # a text release's coverage bank: prompts far from every training caption warn (PromptCoverageWarning)
+        self.coverage = load_coverage(self.model, source) if source else None
         shape = feed_forward_shape(self.model, 1, int(self.model.hparams.max_frames))  # one motion, as most calls
         self.precision = inference_precision(precision, str(self.model.device), shape)
 
@@ -117,6 +120,7 @@ class MotionPipeline:
         DDPM, at most the model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
         prompts = self._prompts(prompt)
         lengths = [self._frames(s) for s in self._per_prompt(seconds, len(prompts), "seconds")]
+        far = warn_far(self.model, self.coverage, prompts)
         n = self._count(num_samples)
         sampling = self._sampling(guidance, sampler, steps, eta)
         conditions = [p for p in prompts for _ in range(n)]
@@ -128,7 +132,7 @@ class MotionPipeline:
         if smooth_sigma:
             joints = [smooth_joints(j, float(smooth_sigma)) for j in joints]
         info = {"model": self.source, **sampling, "seed": int(seed), "smooth_sigma": smooth_sigma,
-                "precision": self.precision, "joints_changed": bool(smooth_sigma)}  # fmt: skip
+                "precision": self.precision, "joints_changed": bool(smooth_sigma), "coverage_warnings": far}  # fmt: skip
         return self._output(joints, feats, [self._label(c) for c in conditions], info)
 
     def long(
@@ -149,6 +153,7 @@ class MotionPipeline:
             text, _, timed = str(item).rpartition(":") if _is_timed(item) else (item, "", "")
             texts.append(check_text(text))
             secs.append(float(timed) if timed else float(s))
+        far = warn_far(self.model, self.coverage, texts)
         n = check_num_samples(num_samples, MAX_LONG_SAMPLES)  # a long motion's windows chain: one batch
         generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
         segments = [(repeated(self.model, t, n), s) for t, s in zip(texts, secs, strict=True)]
@@ -159,7 +164,8 @@ class MotionPipeline:
         except ValueError as err:
             raise UsageError(str(err)) from None
         title = " then ".join(texts)
-        info = {"model": self.source, "segments": result.segments, "seed": int(seed), **sampling}
+        info = {"model": self.source, "segments": result.segments, "seed": int(seed), **sampling,
+                "coverage_warnings": far}  # fmt: skip
         return self._output(list(result.joints), list(result.features), [title] * n, info)
 
     # ---- editing ------------------------------------------------------------------------------------------------
@@ -188,6 +194,7 @@ class MotionPipeline:
     # ---- helpers ------------------------------------------------------------------------------------------------
     def _edited(self, fn, source: InputMotion, prompt, options: dict, num_samples, seed, sampling) -> MotionOutput:
         condition = None if prompt is None else self._prompts(prompt)[0]
+        warn_far(self.model, self.coverage, [condition])
         try:
             with sampling_precision(self.model, self.precision):
                 result = fn(self.model, source, condition=condition, num_samples=self._count(num_samples),
