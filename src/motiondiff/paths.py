@@ -26,7 +26,7 @@ def work_dir() -> Path:
 
 # checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
 SHIPPED_MODELS = {
-    "text": REPO_DIR / "checkpoints" / "models" / "bandai_mini_text_cpu.safetensors",
+    "text": REPO_DIR / "checkpoints" / "models" / "bandai_text_cpu.safetensors",  # docs/results/shipping/rules.md
     "action": REPO_DIR / "checkpoints" / "models" / "bandai_action_cpu.safetensors",
 }
 SHIPPED_MODEL = SHIPPED_MODELS["text"]

@@ -176,7 +176,7 @@ def test_shipped_model_samples_with_every_export(tmp_path):
             "sampler.steps=3", "export=[bvh,html]", env_dir=tmp_path)  # fmt: skip
     out = next((tmp_path / "outputs" / "sample").iterdir())
     summary = json.loads((out / "results.json").read_text())
-    assert summary["checkpoint"].endswith("bandai_mini_text_cpu.safetensors")
+    assert summary["checkpoint"].endswith("bandai_text_cpu.safetensors")
     (row,) = summary["samples"]
     exports = row["exports"]
     assert set(exports) >= {"bvh", "html"} and row["video"] is None

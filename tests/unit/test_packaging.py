@@ -29,7 +29,8 @@ def test_wheel_bundles_configs_models_data_and_commands(tmp_path):
     for needed in (
         "conf/sample.yaml",
         "conf/paths/default.yaml",
-        "checkpoints/models/bandai_mini_text_cpu.safetensors",
+        "checkpoints/models/bandai_text_cpu.safetensors",
+        "checkpoints/models/bandai_text_cpu.coverage.safetensors",
         "checkpoints/evaluators/bandai_mini/text_motion.safetensors",
         "data/bandai_mini/meta.json",
     ):

@@ -6,6 +6,7 @@ same representation), so an edit starts from what the model knows how to continu
 
 from __future__ import annotations
 
+import logging
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +25,8 @@ from motiondiff.skeleton import Skeleton, get_skeleton
 
 MIN_INPUT_FRAMES = 4  # at least a kept frame on each side of a gap and something to generate
 SPLIT_ORDER = ("test", "val", "train")  # where a bare clip id is looked up, in this order
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -359,9 +362,18 @@ def training_data_root(module, data_dir: str | os.PathLike | None = None, cache_
     return Path(cfg.dataset.datamodule.cache if name == "bvh" else cfg.dataset.root)
 
 
+# A dataset whose clips the checkout ships a real subset of, with the same features and clip ids: a model trained on
+# the full Bandai data looks clip ids up in the embedded data/bandai_mini until `make data-full` prepares data/bandai.
+EMBEDDED_SUBSETS = {"bandai": "bandai_mini"}
+
+
 def _dataset_features(spec: str, module, data_root) -> tuple[np.ndarray, dict]:
     split, _, clip_id = spec.rpartition(":")
     root = Path(data_root) if data_root is not None else training_data_root(module)
+    subset = EMBEDDED_SUBSETS.get(module.hparams.get("dataset") or "")
+    if data_root is None and subset and (root is None or not root.is_dir()):
+        log.info("%s is not prepared (make data-full): looking %s up in the embedded data/%s", root, spec, subset)
+        root = REPO_DIR / "data" / subset
     if root is None or not root.is_dir():
         raise EditError(
             f"input {spec!r} is not a .bvh or .npy file, and there is no dataset to look it up as a clip id in "

@@ -16,9 +16,9 @@ def test_keep_mask_keeps_one_minus_p_and_says_the_exact_probability():
     for p in (0.1, 0.5, 0.9):
         mask, keep = keep_mask((1000, 4003), p)  # an odd size: the last 64-bit word is used in part
         assert mask.dtype == torch.bool and mask.shape == (1000, 4003)
-        assert abs(keep - (1 - p)) < 1 / 65536
+        assert abs(keep - (1 - p)) <= 1 / 512  # rounded to a multiple of 1/256
         assert abs(mask.float().mean().item() - keep) < 2e-3
-    for tiny in (0.0, 1e-7):  # rounds to keeping everything
+    for tiny in (0.0, 1e-3):  # rounds to keeping everything
         mask, keep = keep_mask((10, 10), tiny)
         assert mask.all() and keep == 1.0
     with pytest.raises(ValueError, match=r"\[0, 1\)"):
