@@ -65,6 +65,10 @@ class MotionDiffusion(torch.nn.Module):
         self._hparams = HyperParameters({k: v for k, v in locals().items() if k not in ("self", "__class__")})
         self.condition_kind = condition["kind"]
         self.cond_drop_prob = float(condition.get("drop_prob", 0.1))
+        # Text-feature noise in training (condition.text_noise): each caption's prepared features (centred, unit mean
+        # norm) get isotropic Gaussian noise of expected norm text_noise, so nearby wordings of one caption share its
+        # motion (the nearest caption of another action is about 0.5 away, two of one action about 1.2).
+        self.text_noise = float(condition.get("text_noise") or 0.0)
         cond_dim = text_encoder["dim"] if self.condition_kind == "text" else None
         self.denoiser = MDMDenoiser(
             feature_dim=feature_dim,
@@ -178,7 +182,10 @@ class MotionDiffusion(torch.nn.Module):
                 float(self.known_conditioning.get("frame_share", 0.5)),
             )  # fmt: skip
             known = {"known": x0, "keep": keep}
-        out = self.denoiser(x_t, t, cond=self.batch_condition(batch), mask=mask, drop_cond=drop, **known)
+        cond = self.batch_condition(batch)
+        if perturb and self.text_noise and self.condition_kind == "text":
+            cond = cond + torch.randn_like(cond) * (self.text_noise / cond.shape[-1] ** 0.5)
+        out = self.denoiser(x_t, t, cond=cond, mask=mask, drop_cond=drop, **known)
         loss = self.diffusion.loss(out, x0, noise, t, mask=mask)
         parts = {"diffusion": loss.detach()}
         if self.geometric is not None:
