@@ -33,7 +33,49 @@ DEFAULT_PROMPTS = (
     ("a person waves the right hand", 3.0, "wave-right-hand"),
     ("a person kicks", 3.0, "kick"),
     ("a person bows", 3.0, "bow"),
+    ("a person walks backwards", 4.0, "walk-back"),
 )
+# Walking speed must not depend on the asked length (issue 39): each prompt at each length, against the real clips'
+SPEED_PROMPTS = (("a person walks forward", "walk"), ("a person runs", "run"))
+SPEED_SECONDS = (2.0, 4.0, 6.0)
+SPEED_TOLERANCE = 0.2  # generated median within ±20% of the real clips' median speed
+
+
+def net_speed(joints: np.ndarray, fps: float) -> float:
+    """Ground distance between the root's first and last position per second (m/s): jitter does not add to it."""
+    path = joints[[0, -1], 0][:, [0, 2]]
+    return float(np.linalg.norm(path[1] - path[0]) * fps / max(len(joints) - 1, 1))
+
+
+def speed_table(pipe: MotionPipeline, data_root, n: int, seed: int, **sampling) -> list[dict]:
+    """Median net speed of n samples per speed prompt and length, and of the real train clips of its label."""
+    from motiondiff.data.formats.prepared import load_split
+
+    train = load_split(data_root, "train")
+    rows = []
+    for prompt, label in SPEED_PROMPTS:
+        real = [net_speed(train.arrays["joints"][train.clip_slice(i)], pipe.fps) for i in range(train.num_clips)
+                if train.label("content", i) == label]  # fmt: skip
+        real_median = float(np.median(real)) if real else float("nan")
+        for seconds in SPEED_SECONDS:
+            if seconds > pipe.max_seconds:
+                continue
+            joints, _ = generate(pipe, prompt, seconds, n, seed, **sampling)
+            speed = float(np.median([net_speed(j, pipe.fps) for j in joints]))
+            ratio = speed / real_median if real else float("nan")
+            rows.append({"prompt": prompt, "label": label, "seconds": seconds, "speed": speed, "real": real_median,
+                         "ratio": ratio, "holds": bool(abs(ratio - 1) <= SPEED_TOLERANCE)})  # fmt: skip
+    return rows
+
+
+def speed_markdown(rows: list[dict]) -> str:
+    lines = ["### Speed by length", "", f"Median net root speed of the samples (m/s) against the median of the real train "
+             f"clips of the label; holds: within ±{SPEED_TOLERANCE:.0%}.", "",
+             "| prompt | seconds | generated m/s | real m/s | ratio | holds |", "|---|---:|---:|---:|---:|---|"]  # fmt: skip
+    for r in rows:
+        lines.append(f"| {r['prompt']} | {r['seconds']:g} | {r['speed']:.2f} | {r['real']:.2f} | {r['ratio']:.2f} | "
+                     f"{'yes' if r['holds'] else 'no'} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
 
 
 def default_sampler(conf_dir: Path = CONF_DIR) -> dict:
@@ -254,9 +296,13 @@ def main(argv: list[str]) -> None:
     print("\n".join(header))
     rows = report(module, data_root, cfg.num_samples, cfg.seed, evaluators, **sampling)
     print_report(rows)
+    speeds = speed_table(MotionPipeline(module), data_root, cfg.num_samples, cfg.seed, **sampling) if (
+        module.condition_kind == "text") else []  # fmt: skip
     out = Path(cfg.out or outputs / "behaviour" / time.strftime("%Y-%m-%d_%H-%M-%S"))
     out.mkdir(parents=True, exist_ok=True)
-    (out / "behaviour.md").write_text(markdown_report(rows, header))
+    speed_text = speed_markdown(speeds) if speeds else ""
+    print(speed_text)
+    (out / "behaviour.md").write_text(markdown_report(rows, header) + ("\n" + speed_text if speed_text else ""))
     if evaluators is not None:
         names = evaluators.action_names
         asked = [names.index(r["label"]) for r in rows.values() if r["predicted"] and r["label"] in names

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from fixtures.synthetic_motion import glide as _walk
 from fixtures.synthetic_motion import rest_pose as _rest_pose
 
@@ -54,7 +55,7 @@ def test_report_samples_as_sample_py_does():
         cfg = compose("sample")  # what sample.py runs with when given nothing
     assert default_sampler() == {"sampler": cfg.sampler.name, "steps": cfg.sampler.steps}
     asked = {label for _, _, label in DEFAULT_PROMPTS}
-    assert {"walk", "run", "raise-up-both-hands", "wave-right-hand", "kick", "bow"} <= asked
+    assert {"walk", "run", "raise-up-both-hands", "wave-right-hand", "kick", "bow", "walk-back"} <= asked
 
 
 def test_an_action_model_is_asked_with_the_prompts_labels():
@@ -72,3 +73,29 @@ def test_an_action_model_is_asked_with_the_prompts_labels():
     rows = report(module, embedded_data_root(), n=2, steps=2, prompts=DEFAULT_PROMPTS[:2])
     assert list(rows) == ["walk", "run"]
     assert all(r["label"] == name and len(r["generated"].travel) == 2 for name, r in rows.items())
+
+
+def test_net_speed_is_ground_distance_per_second_and_ignores_jitter():
+    from motiondiff.studies.behaviour import net_speed
+
+    frames = 41  # 2 s at 20 fps
+    joints = np.zeros((frames, 22, 3))
+    joints[:, 0, 2] = np.linspace(0, 2.0, frames)  # 2 m forward along z in 2 s
+    joints[:, 0, 1] = 0.9 + 0.05 * np.sin(np.arange(frames))  # bobbing height does not count
+    joints[1:-1:2, 0, 0] += 0.1  # sideways jitter between the end frames does not count
+    assert net_speed(joints, 20.0) == pytest.approx(1.0)
+
+
+def test_the_speed_table_measures_each_length_against_the_real_clips():
+    import torch
+
+    from motiondiff.cli.common import SHIPPED_MODELS
+    from motiondiff.pipelines import MotionPipeline
+    from motiondiff.release import load_release
+    from motiondiff.studies.behaviour import SPEED_PROMPTS, speed_table
+
+    torch.manual_seed(0)
+    pipe = MotionPipeline(load_release(SHIPPED_MODELS["text"]))
+    rows = speed_table(pipe, embedded_data_root(), n=2, seed=0, sampler="ddim", steps=2)
+    assert [(r["label"], r["seconds"]) for r in rows] == [(label, s) for _, label in SPEED_PROMPTS for s in (2, 4, 6)]
+    assert all(r["real"] > 0.5 and r["ratio"] == pytest.approx(r["speed"] / r["real"]) for r in rows)
