@@ -194,7 +194,7 @@ CASES = [
     Case("edit_cleanup_unknown", edit(CLIP, "kind=inbetween", "cleanup=toes"), UsageError, "unknown clean-up 'toes'"),
     Case("edit_cleanup_bones", edit(CLIP, "kind=inbetween", "cleanup=bones"), UsageError, "cleanup=bones refits every frame and would move the part the edit kept"),
     Case("checkpoint_of_another_dataset", lambda tmp: run_entry("evaluate", tmp, "checkpoint=shipped", "dataset=kit", "wandb=false"),
-         UsageError, "pass dataset=bandai_mini"),
+         UsageError, "the checkpoint was trained on 'bandai'; pass dataset=bandai"),
     Case("evaluate_smoothing_negative", lambda tmp: run_entry("evaluate", tmp, "checkpoint=shipped", "smooth_sigma=-1", "wandb=false"),
          UsageError, "smooth_sigma is a Gaussian's width in frames"),
     Case("clip_x0_unknown_rule", sample("text=walk", "clip_x0=imagen"), UsageError, "choose none, static or dynamic"),

@@ -69,7 +69,7 @@ def test_evaluate_writes_paper_table_and_sweep_plot(text_ckpt, tmp_path):
 
 
 def test_evaluate_refuses_a_checkpoint_of_another_dataset(text_ckpt, tmp_path):
-    assert "pass dataset=bandai_mini" in user_error("evaluate", tmp_path, f"checkpoint={text_ckpt}", "dataset=bandai",
+    assert "pass dataset=bandai_mini" in user_error("evaluate", tmp_path, f"checkpoint={text_ckpt}", "dataset=kit",
                                                      "wandb=false")  # fmt: skip
 
 

@@ -15,7 +15,7 @@ from motiondiff.cli.sample import cleanup_option, export_formats, slug
 from motiondiff.cli.validate import RULES_EDIT, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.cleanups import apply_cleanups, check_for_edit
-from motiondiff.edit.inputs import InputMotion, load_input_motion, read_bvh_input, training_data_root
+from motiondiff.edit.inputs import InputMotion, load_input_motion, read_bvh_input, clip_data_root
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import check_formats_for, export_features
 from motiondiff.hardware import inference_precision, resolve_device
@@ -97,7 +97,7 @@ def run(cfg: DictConfig) -> Path:
     condition = edit_condition(cfg, module)
     fps = float(module.hparams.fps)
     try:
-        data_root = Path(cfg.data) if cfg.data else training_data_root(module, cfg.paths.data_dir, cfg.paths.cache_dir)
+        data_root = Path(cfg.data) if cfg.data else clip_data_root(module, cfg.paths.data_dir, cfg.paths.cache_dir)
         length = None if cfg.length is None else frames_from_seconds(float(cfg.length), fps)
         motion = load_input_motion(cfg.input, module, data_root=data_root, start=frames_from_seconds(cfg.start, fps),
                                    frames=length, up_axis=str(cfg.get("up_axis", "auto")),

@@ -367,13 +367,20 @@ def training_data_root(module, data_dir: str | os.PathLike | None = None, cache_
 EMBEDDED_SUBSETS = {"bandai": "bandai_mini"}
 
 
+def clip_data_root(module, data_dir=None, cache_dir=None) -> Path | None:
+    """Where clip ids of the model's training data are looked up: its dataset folder (`training_data_root`), or the
+    checkout's embedded real subset of it while the full dataset is not prepared."""
+    root = training_data_root(module, data_dir, cache_dir)
+    subset = EMBEDDED_SUBSETS.get(module.hparams.get("dataset") or "")
+    if subset and (root is None or not root.is_dir()) and (REPO_DIR / "data" / subset).is_dir():
+        log.info("%s is not prepared (make data-full): clip ids are looked up in the embedded data/%s", root, subset)
+        return REPO_DIR / "data" / subset
+    return root
+
+
 def _dataset_features(spec: str, module, data_root) -> tuple[np.ndarray, dict]:
     split, _, clip_id = spec.rpartition(":")
-    root = Path(data_root) if data_root is not None else training_data_root(module)
-    subset = EMBEDDED_SUBSETS.get(module.hparams.get("dataset") or "")
-    if data_root is None and subset and (root is None or not root.is_dir()):
-        log.info("%s is not prepared (make data-full): looking %s up in the embedded data/%s", root, spec, subset)
-        root = REPO_DIR / "data" / subset
+    root = Path(data_root) if data_root is not None else clip_data_root(module)
     if root is None or not root.is_dir():
         raise EditError(
             f"input {spec!r} is not a .bvh or .npy file, and there is no dataset to look it up as a clip id in "
