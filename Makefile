@@ -133,10 +133,12 @@ data: setup
 		--out data/bandai_mini --per-group 2 --max-frames 80 --compact --seed 0 --caption-variants 0 --rare-to-train 0 --force
 
 # The full Bandai Namco set (2,787 clips, ~450 MB, about 2 minutes) for dataset=bandai and experiment=bandai_text.
+# No generated caption repeats a description of the human-style sets (the held-out ones and the one for choosing).
+HUMAN_SETS := bandai_human bandai_human_2 bandai_human_val
 data-full: setup
 	@test -f data/bandai/meta.json && echo "data/bandai is prepared (rm -r data/bandai to rebuild)" || \
 	$(PY) -m motiondiff.data.preparing.prepare bandai --src $(BANDAI)/bandai-ds1.zip --src $(BANDAI)/bandai-ds2.zip \
-		--out data/bandai --seed 0 --held-out data/paraphrases/bandai_human.json
+		--out data/bandai --seed 0 $(foreach s,$(HUMAN_SETS),--held-out data/paraphrases/$(s).json)
 
 lock: setup
 	( echo "# Exact versions of every installed package (pip freeze of a working .venv); used as pip constraints by the Makefile."; \

@@ -224,11 +224,14 @@ def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_EVALUATE)  # types and ranges before any work
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.pipelines.coverage import load_prompt_mapping
 
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
     _check(cfg, module)  # before any work: bad settings fail at once
+    if module.condition_kind == "text":
+        module.prompt_mapping = load_prompt_mapping(ckpt, cfg.prompt_mapping)
     shape = feed_forward_shape(module, int(cfg.batch_size), int(module.hparams.max_frames))
     cfg.precision = inference_precision(cfg.precision, cfg.device, shape)  # auto: bf16 where measured faster
     rep = (module.hparams.get("representation") or {}).get("name")

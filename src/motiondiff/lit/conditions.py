@@ -75,7 +75,11 @@ def condition_batch(module, conditions: list):
         if index and all(c in index for c in conditions):  # training captions (e.g. the evaluation callback's):
             rows = torch.tensor([index[c] for c in conditions], device=module.text_table.device)
             return module.text_table[rows]  # already prepared; no encoder needed
-        return module.prepare_text(prompt_features(module, conditions).to(module.device))
+        features = prompt_features(module, conditions)
+        mapping = getattr(module, "prompt_mapping", None)  # text.prompt_mapping: onto the nearest train caption
+        if mapping is not None:
+            features = torch.from_numpy(mapping(features.float().numpy())).to(features.dtype)
+        return module.prepare_text(features.to(module.device))
     if module.condition_kind == "action":
         names = module.hparams.action_names
         ids = [c if isinstance(c, int | np.integer) else names.index(c) for c in conditions]

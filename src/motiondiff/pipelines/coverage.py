@@ -11,8 +11,10 @@ import logging
 import warnings
 from pathlib import Path
 
+from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import prompt_features
 from motiondiff.text.coverage import CoverageReport, PromptCoverage, coverage_path
+from motiondiff.text.prompt_mapping import PromptMapping, check_mode
 
 log = logging.getLogger(__name__)
 
@@ -48,3 +50,19 @@ def warn_far(model, coverage: PromptCoverage | None, prompts: list) -> list[str]
     for line in lines:
         warnings.warn(line, PromptCoverageWarning, stacklevel=3)
     return lines
+
+
+def load_prompt_mapping(model_path: str | Path, mode: str) -> PromptMapping | None:
+    """The prompt mapping of `mode` onto the coverage bank beside a release (None for "none"); a missing bank or an
+    unknown mode is one UsageError naming the fix."""
+    try:
+        check_mode(mode)
+    except ValueError as err:
+        raise UsageError(str(err)) from None
+    if mode == "none":
+        return None
+    bank = coverage_path(model_path)
+    if not bank.is_file():
+        raise UsageError(f"prompt_mapping={mode} needs the coverage bank {bank}; build it with "
+                         "python -m motiondiff.studies.prompt_coverage, or pass prompt_mapping=none")  # fmt: skip
+    return PromptMapping(PromptCoverage.load(bank), mode)

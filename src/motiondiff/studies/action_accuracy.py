@@ -81,6 +81,7 @@ def main(argv: list[str]) -> None:
     from motiondiff.eval.protocol import Evaluators
     from motiondiff.lit.loading import load_model as load_module
     from motiondiff.paths import find_checkpoint, work_dir
+    from motiondiff.pipelines.coverage import load_prompt_mapping
     from motiondiff.studies.behaviour import sampling_args
     from motiondiff.studies.config import study_config
 
@@ -90,6 +91,7 @@ def main(argv: list[str]) -> None:
     module = load_module(ckpt)
     if module.condition_kind != "text":
         raise SystemExit(f"{ckpt} is a {module.condition_kind} model; descriptions are for text models")
+    module.prompt_mapping = load_prompt_mapping(ckpt, cfg.prompt_mapping)
     dataset = module.hparams.get("dataset") or "bandai_mini"
     evaluators = Evaluators.load(REPO_DIR / "checkpoints" / "evaluators" / dataset, module.hparams.num_joints)
     evaluators.for_module(module)
@@ -108,7 +110,7 @@ def main(argv: list[str]) -> None:
     out.mkdir(parents=True, exist_ok=True)
     notes = [f"checkpoint: {ckpt}", f"descriptions: {cfg.captions} ({len(items)}), "
              f"{n} samples each, seed {seed}; sampler {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
-             f"guidance {sampling['guidance']:g}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}; "
+             f"guidance {sampling['guidance']:g}, prompt mapping {cfg.prompt_mapping}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}; "
              f"{time.perf_counter() - start:.0f} s",
              f"accuracy over all {len(result['asked'])} motions: {accuracy:.3f}; lowest action: "
              f"{min(rows, key=lambda r: r['generated'])['action']} {min(r['generated'] for r in rows):.2f}",
