@@ -19,6 +19,7 @@ from motiondiff.checked_loading import check_finite_state, check_same_shapes, re
 from motiondiff.errors import UsageError
 from motiondiff.release_checks import (
     FORMAT,
+    LATENT_CLASS,
     MODEL_CLASS,
     RESTORE,
     check_release_files,
@@ -30,7 +31,8 @@ from motiondiff.release_checks import (
 
 
 def save_release(module, path: str | Path, provenance: dict | None = None) -> tuple[Path, Path]:
-    """Write `<stem>.safetensors` and `<stem>.json` for a MotionDiffusion model (atomically, weights first)."""
+    """Write `<stem>.safetensors` and `<stem>.json` for a MotionDiffusion model or a GuidedMotion latent model with
+    its VAEs (atomically, weights first)."""
     weights, config = release_paths(path)
     state = {k: v.detach().cpu().contiguous() for k, v in module.state_dict().items()}
     check_finite_state(state, f"the model to release as {weights}", "release a checkpoint whose weights are finite")
@@ -39,7 +41,8 @@ def save_release(module, path: str | Path, provenance: dict | None = None) -> tu
         hparams["text_encoder"].pop("path", None)
     weights.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(weights, lambda tmp: save_file(state, str(tmp)), suffix=".safetensors")
-    meta = {"format": FORMAT, "class": MODEL_CLASS, "hparams": hparams, "provenance": provenance or {},
+    kind = LATENT_CLASS if type(module).__name__ == LATENT_CLASS else MODEL_CLASS
+    meta = {"format": FORMAT, "class": kind, "hparams": hparams, "provenance": provenance or {},
             "weights_sha256": sha256_of(weights)}  # fmt: skip
     text = json.dumps(meta, indent=1, allow_nan=False)
     atomic_write(config, lambda tmp: Path(tmp).write_text(text), suffix=".json")
@@ -52,12 +55,7 @@ def load_release(path: str | Path, device: str = "cpu"):
     from motiondiff.lit.motion_diffusion import MotionDiffusion
 
     weights, config = release_paths(path)
-    meta = check_release_files(path)  # the files, the checksum, finite weights (those numpy reads)
-    check_release_meta(meta, config)  # the hyper-parameters too, before anything is built from them
-    with reading(weights, "release weights", RESTORE):
-        state = load_file(str(weights), device="cpu")
-    bf16 = {k: v for k, v in state.items() if v.dtype == torch.bfloat16}  # numpy has no bfloat16
-    check_finite_state(bf16, f"release weights {weights}", RESTORE)
+    meta, state = _checked_release(path, MODEL_CLASS)
     with reading(config, "release config", RESTORE):
         module = MotionDiffusion(**meta["hparams"])
         bridge_from_spec(meta["hparams"].get("representation"), meta["hparams"]["feature_dim"])  # what saving reads
@@ -70,6 +68,44 @@ def load_release(path: str | Path, device: str = "cpu"):
     )
     module.load_state_dict(state, strict=True)
     return module.to(device).eval()
+
+
+def load_latent_release(path: str | Path, device: str = "cpu"):
+    """GuidedMotion's latent model (with its three VAEs) from a release, in eval mode; strict like `load_release`."""
+    from motiondiff.lit.latent import HierarchicalLatentModule
+
+    weights, config = release_paths(path)
+    meta, state = _checked_release(path, LATENT_CLASS)
+    with reading(config, "release config", RESTORE):
+        module = HierarchicalLatentModule(**meta["hparams"])
+    check_same_shapes(state, module.state_dict(), f"release weights {weights}", RESTORE,
+                      f"the model {config.name} describes")  # fmt: skip
+    module.load_state_dict(state, strict=True)
+    return module.to(device).eval()
+
+
+def release_class(path: str | Path) -> str:
+    """The class a release names (after the checks that need no model): MotionDiffusionModule or the latent's."""
+    return check_release_files(path)["class"]
+
+
+def _checked_release(path: str | Path, expected: str) -> tuple[dict, dict]:
+    """(JSON, weights) of a release of class `expected`, every check passed; another class is one clear error."""
+    weights, config = release_paths(path)
+    meta = check_release_files(path)  # the files, the checksum, finite weights (those numpy reads)
+    if meta.get("class") in (MODEL_CLASS, LATENT_CLASS) and meta["class"] != expected:
+        use = (
+            "GuidedMotion's latent model: use it with sample.py method=guidedmotion or GuidedMotionPipeline"
+            if meta["class"] == LATENT_CLASS
+            else "a motion model: use it with sample.py or MotionPipeline"
+        )
+        raise UsageError(f"release {weights} is {use}")
+    check_release_meta(meta, config)  # the hyper-parameters too, before anything is built from them
+    with reading(weights, "release weights", RESTORE):
+        state = load_file(str(weights), device="cpu")
+    bf16 = {k: v for k, v in state.items() if v.dtype == torch.bfloat16}  # numpy has no bfloat16
+    check_finite_state(bf16, f"release weights {weights}", RESTORE)
+    return meta, state
 
 
 def provenance_of(release: str | Path) -> dict:
@@ -96,15 +132,18 @@ def cpu_description() -> str:
 
 
 def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple[Path, Path]:
-    """Release a training checkpoint (its EMA weights when it trained with EMA) with the training step, the run's
+    """Release a training checkpoint (a motion model, with its EMA weights when it trained with EMA, or a
+    GuidedMotion latent model with its VAEs) with the training step, the run's
     command line and `provenance` (data, training time, machine, metrics) in the JSON."""
     from motiondiff.checked_loading import torch_load
     from motiondiff.lit.diffusion import MotionDiffusionModule
+    from motiondiff.lit.latent import HierarchicalLatentModule
     from motiondiff.provenance import git_state
 
     state = torch_load(ckpt)
+    cls = HierarchicalLatentModule if "vaes" in (state.get("hyper_parameters") or {}) else MotionDiffusionModule
     with reading(ckpt, "checkpoint"):
-        module = MotionDiffusionModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
+        module = cls.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
     run = Path(ckpt).resolve().parents[1] / "run.json"
     trained = json.loads(run.read_text())["provenance"] if run.is_file() else {}
     argv = trained.get("argv", [])

@@ -19,6 +19,8 @@ from motiondiff.paths import RELEASE_SUFFIXES
 
 FORMAT = "motiondiff-release-1"
 MODEL_CLASS = "MotionDiffusionModule"  # the class a release names (loaded as lit.motion_diffusion.MotionDiffusion)
+LATENT_CLASS = "HierarchicalLatentModule"  # GuidedMotion's latent model with its three VAEs (lit.latent)
+MODEL_CLASSES = (MODEL_CLASS, LATENT_CLASS)
 TOP_KEYS = {"format", "class", "hparams", "provenance", "weights_sha256"}
 CONDITION_KINDS = ("text", "action", "none")
 ENCODER_KEYS = {"name", "dim", "max_length"}  # never "path": a release names its encoder, the user's config finds it
@@ -116,8 +118,8 @@ def check_release_meta(meta: dict, config: Path, hparams: bool = True) -> None:
     missing = sorted(TOP_KEYS - set(meta))
     if unknown or missing:
         raise UsageError(f"{where}: {_keys_problem(unknown, missing, TOP_KEYS)}; {RESTORE}")
-    if meta["class"] != MODEL_CLASS:
-        raise UsageError(f"{where}: class {meta['class']!r} is not {MODEL_CLASS}; {RESTORE}")
+    if meta["class"] not in MODEL_CLASSES:
+        raise UsageError(f"{where}: class {_shown(meta['class'])} is not one of {', '.join(MODEL_CLASSES)}; {RESTORE}")
     digest = meta["weights_sha256"]
     if not isinstance(digest, str) or not re.fullmatch(r"[0-9a-f]{64}", digest):
         raise UsageError(f"{where}: weights_sha256 must be 64 lowercase hex digits, got {digest!r}; {RESTORE}")
@@ -126,7 +128,7 @@ def check_release_meta(meta: dict, config: Path, hparams: bool = True) -> None:
     if not isinstance(meta["hparams"], dict):
         raise UsageError(f"{where}: hparams must be an object; {RESTORE}")
     if hparams:
-        _check_hparams(meta["hparams"], where)
+        (_check_latent_hparams if meta["class"] == LATENT_CLASS else _check_hparams)(meta["hparams"], where)
 
 
 def _keys_problem(unknown: list, missing: list, allowed) -> str:
@@ -189,6 +191,49 @@ def _check_hparams(h: dict, where: str) -> None:
     if kind == "action" and not names:
         fail("action_names", "a non-empty list of names for an action model")
     _check_text_encoder(h.get("text_encoder"), kind, where)
+
+
+def _check_keys(h: dict, cls, where: str, prefix: str = "hparams") -> None:
+    params = list(inspect.signature(cls.__init__).parameters.values())[1:]
+    every = {p.name for p in params}
+    required = {p.name for p in params if p.default is inspect.Parameter.empty}
+    unknown, missing = sorted(set(h) - every), sorted(required - set(h))
+    if unknown or missing:
+        raise UsageError(f"{where}: {prefix} has {_keys_problem(unknown, missing, every)}; {RESTORE}")
+
+
+def _check_latent_hparams(h: dict, where: str) -> None:
+    """A GuidedMotion latent release: its own keys, a VAE per level with finite normalisation, a named encoder."""
+    from motiondiff.lit.latent import HierarchicalLatentModule
+    from motiondiff.lit.vae import MotionVAEModule
+    from motiondiff.models.hierarchical import LEVELS
+
+    _check_keys(h, HierarchicalLatentModule, where)
+
+    def fail(key: str, want: str):
+        raise UsageError(f"{where}: hparams.{key}={_shown(_get(h, key))} must be {want}; {RESTORE}")
+
+    for key in ("model", "diffusion", "optim", "vaes"):
+        if not isinstance(h[key], dict):
+            fail(key, "an object")
+    if not _is_int(h["node_dim"]) or h["node_dim"] < 1:
+        fail("node_dim", "an integer >= 1")
+    for level in LEVELS:
+        vae = h["vaes"].get(level)
+        if not isinstance(vae, dict):
+            fail(f"vaes.{level}", "an object (GuidedMotion has a VAE per level)")
+        _check_keys(vae, MotionVAEModule, where, f"hparams.vaes.{level}")
+        for key in ("feature_dim", "max_frames", "num_joints"):
+            if not _is_int(vae[key]) or vae[key] < 1:
+                fail(f"vaes.{level}.{key}", "an integer >= 1")
+        if not _is_number(vae["fps"]) or not vae["fps"] > 0:
+            fail(f"vaes.{level}.fps", "a finite number > 0")
+        for key in ("mean", "std"):
+            if not _numbers(vae[key], vae["feature_dim"]):
+                fail(f"vaes.{level}.{key}", f"a list of {vae['feature_dim']} finite numbers (feature_dim)")
+        if not all(s > 0 for s in vae["std"]):
+            fail(f"vaes.{level}.std", "positive everywhere")
+    _check_text_encoder(h["text_encoder"], "text", where)
 
 
 def _check_text_encoder(encoder, kind: str, where: str) -> None:

@@ -163,3 +163,30 @@ def test_web_demo_offers_guidedmotion_with_a_weight_per_local_action(latent_ckpt
     assert samples[0].bvh.is_file() and samples[0].mp4.is_file() and samples[0].html.is_file()
     with pytest.raises(UsageError, match="one per action"):
         generate(models, "guided", CAPTION, tmp_path, seconds=1.0, steps=2, weights="1")
+
+
+def test_a_latent_model_releases_as_safetensors_and_samples_like_its_checkpoint(latent_ckpt):
+    """release_checkpoint writes the latent model and its three VAEs as one release; it loads to the same weights,
+    sample.py takes it, a motion-model loader refuses it in one line, and a damaged VAE entry is named."""
+    from motiondiff.errors import UsageError
+    from motiondiff.lit.loading import load_latent_model
+    from motiondiff.release import load_release, release_checkpoint
+
+    work, ckpt = latent_ckpt
+    weights, config = release_checkpoint(ckpt, work / "release" / "guided")
+    meta = json.loads(config.read_text())
+    assert meta["class"] == "HierarchicalLatentModule" and meta["provenance"]["train_steps"] == 2
+    assert "path" not in meta["hparams"]["text_encoder"]
+    released, trained = load_latent_model(weights), load_latent_model(ckpt)
+    for key, value in trained.state_dict().items():
+        assert torch.equal(value, released.state_dict()[key]), key
+    with pytest.raises(UsageError, match="GuidedMotion's latent model: use it with sample.py method=guidedmotion"):
+        load_release(weights)
+    proc = run_cli("sample.py", "method=guidedmotion", f"checkpoint={weights}", f"text='{CAPTION}'", "length=2",
+                   "level_steps=[2,2,2]", "export=none", "hydra.run.dir=released_out", env_dir=work)  # fmt: skip
+    assert "GuidedMotion sample(s)" in proc.stdout
+    broken = dict(meta, hparams=dict(meta["hparams"], vaes={k: v for k, v in meta["hparams"]["vaes"].items()
+                                                            if k != "action"}))  # fmt: skip
+    config.write_text(json.dumps(broken))
+    with pytest.raises(UsageError, match=r"hparams.vaes.action=None must be an object"):
+        load_latent_model(weights)

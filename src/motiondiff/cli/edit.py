@@ -15,7 +15,7 @@ from motiondiff.cli.sample import cleanup_option, export_formats, slug
 from motiondiff.cli.validate import RULES_EDIT, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.cleanups import apply_cleanups, check_for_edit
-from motiondiff.edit.inputs import InputMotion, load_input_motion, read_bvh_input, clip_data_root
+from motiondiff.edit.inputs import InputMotion, clip_data_root, load_input_motion, read_bvh_input
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.export.outputs import check_formats_for, export_features
 from motiondiff.hardware import inference_precision, resolve_device

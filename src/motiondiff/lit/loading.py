@@ -26,3 +26,25 @@ def load_model(path: str | Path, device: str = "cpu") -> MotionDiffusion:
     )
     module.load_state_dict(weights, strict=True)
     return module.to(device).eval()
+
+
+LATENT_FIX = "give the .ckpt that train_latent.py wrote or a GuidedMotion release (.safetensors)"
+
+
+def load_latent_model(path: str | Path, device: str = "cpu"):
+    """GuidedMotion's latent model (with its three VAEs) in eval mode: a train_latent.py checkpoint (read without
+    running pickled code) or a release. A file that is neither, or holds NaN weights, is one UsageError."""
+    from motiondiff.checked_loading import check_finite_state
+    from motiondiff.errors import UsageError
+    from motiondiff.lit.latent import HierarchicalLatentModule
+    from motiondiff.release import load_latent_release
+
+    path = Path(path)
+    if not path.is_file():
+        raise UsageError(f"no latent model at {path}: {LATENT_FIX}")
+    if path.suffix in RELEASE_SUFFIXES:
+        return load_latent_release(path, device)
+    with reading(path, "latent checkpoint", LATENT_FIX):
+        module = HierarchicalLatentModule.load_from_checkpoint(path, map_location=device, weights_only=True)
+    check_finite_state(module.state_dict(), f"latent checkpoint {path}", LATENT_FIX)
+    return module.eval()

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.errors import UsageError
 from motiondiff.guided.local_actions import (
     LocalActionError,
@@ -28,7 +27,7 @@ from motiondiff.guided.local_actions import (
 from motiondiff.lit.conditions import text_encoder_kwargs
 from motiondiff.lit.generation import SAMPLE_BATCH, check_finite_output, check_num_samples
 from motiondiff.lit.latent import LATENT_SAMPLERS, HierarchicalLatentModule
-from motiondiff.lit.loading import load_model
+from motiondiff.lit.loading import load_latent_model, load_model
 from motiondiff.models.hierarchical import LEVELS
 from motiondiff.pipelines.motion import resolve_model
 from motiondiff.pipelines.output import MotionOutput
@@ -55,15 +54,12 @@ class GuidedMotionPipeline:
         self._encoder = None
 
     @classmethod
-    def from_pretrained(cls, path: str | Path, local_model: str | Path | None = "text", device: str = "cpu"):
-        path = Path(path)
-        if not path.is_file():
-            raise UsageError(f"no latent model at {path}: give the .ckpt that train_latent.py wrote")
-        with reading(path, "latent checkpoint", "give the .ckpt that train_latent.py wrote"):
-            latent = HierarchicalLatentModule.load_from_checkpoint(path, map_location=device, weights_only=True)
-        check_finite_state(
-            latent.state_dict(), f"latent checkpoint {path}", "give the .ckpt that train_latent.py wrote"
-        )
+    def from_pretrained(cls, path: str | Path = "guidedmotion", local_model: str | Path | None = "text",
+                        device: str = "cpu"):  # fmt: skip
+        """The released GuidedMotion model ("guidedmotion"), a release's .safetensors or a train_latent.py .ckpt;
+        ``local_model``: the text model that makes the local actions (None: give them yourself)."""
+        path = resolve_model(path) if str(path) == "guidedmotion" else Path(path)
+        latent = load_latent_model(path, device)
         mdm = None if local_model is None else load_model(resolve_model(local_model), device)
         return cls(latent, mdm, str(path))
 
