@@ -27,7 +27,6 @@ import torch
 
 from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.bench.timing import median_seconds as timed_median
-from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.errors import UsageError
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
 from motiondiff.lit.conditions import text_encoder_kwargs
@@ -44,7 +43,6 @@ ABLATION = {
 }
 MDM_ROW = "MDM (x0, DDIM-{steps})"
 
-LATENT_FIX = "give the .ckpt that train_latent.py wrote"
 
 
 def local_latents(latent, mdm, graphs, frames: int, generator: torch.Generator, steps: int = 50) -> torch.Tensor:
@@ -210,7 +208,7 @@ def main(argv: list[str] | None = None) -> int:
     from motiondiff.data.datamodules import PreparedDataModule
     from motiondiff.eval.protocol import EvalClips, Evaluators
     from motiondiff.guided.local_actions import check_same_features
-    from motiondiff.lit.latent import HierarchicalLatentModule
+    from motiondiff.lit.loading import load_latent_model
     from motiondiff.lit.loading import load_model as load_module
     from motiondiff.paths import find_checkpoint
     from motiondiff.studies.config import study_config
@@ -223,10 +221,7 @@ def main(argv: list[str] | None = None) -> int:
         raise UsageError(f"level_steps must be three numbers [motion, action, specific], got {list(cfg.level_steps)}")
     latent_path = Path(cfg.latent)
     mdm_path = find_checkpoint(cfg.mdm, REPO_DIR / "outputs")
-    with reading(latent_path, "latent checkpoint", LATENT_FIX):
-        latent = HierarchicalLatentModule.load_from_checkpoint(latent_path, map_location="cpu", weights_only=True)
-    latent.eval()
-    check_finite_state(latent.state_dict(), f"latent checkpoint {latent_path}", LATENT_FIX)
+    latent = load_latent_model(latent_path)
     mdm = load_module(mdm_path)
     local_path = find_checkpoint(cfg.local_model or str(mdm_path), REPO_DIR / "outputs")
     local_mdm = mdm if local_path == mdm_path else load_module(local_path)

@@ -22,7 +22,6 @@ import numpy as np
 import torch
 
 from motiondiff.atomic import finite_or_null, write_json
-from motiondiff.checked_loading import check_finite_state, reading
 from motiondiff.errors import UsageError
 from motiondiff.eval.report import mean_ci
 from motiondiff.lit.conditions import text_encoder_kwargs
@@ -32,7 +31,6 @@ DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "weight_control"
 MOVING = ("walk", "run", "dash", "jog", "step")
 FRAMES = 160  # 8 s at 20 fps: long enough for three local actions, within the complex split's 150-196 frames
 
-LATENT_FIX = "give the .ckpt that train_latent.py wrote"
 
 
 def guided_index(texts: list[str]) -> int:
@@ -155,7 +153,7 @@ def write(out: Path, meta: dict, results: list[dict], summary: dict) -> None:
 def main(argv: list[str] | None = None) -> int:
     from motiondiff.data.datamodules import PreparedDataModule
     from motiondiff.eval.protocol import Evaluators
-    from motiondiff.lit.latent import HierarchicalLatentModule
+    from motiondiff.lit.loading import load_latent_model
     from motiondiff.lit.loading import load_model as load_module
     from motiondiff.studies.config import study_config
     from motiondiff.text.encoders import build_text_encoder
@@ -168,9 +166,7 @@ def main(argv: list[str] | None = None) -> int:
     if len(cfg.level_steps) != 3:
         raise UsageError(f"level_steps must be three numbers [motion, action, specific], got {list(cfg.level_steps)}")
     ckpt = Path(cfg.checkpoint)
-    with reading(ckpt, "latent checkpoint", LATENT_FIX):
-        module = HierarchicalLatentModule.load_from_checkpoint(ckpt, map_location="cpu", weights_only=True).eval()
-    check_finite_state(module.state_dict(), f"latent checkpoint {ckpt}", LATENT_FIX)
+    module = load_latent_model(ckpt)
     mdm = load_module(find_checkpoint(cfg.local_model, REPO_DIR / "outputs"))
     encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
     data = Path(cfg.data or REPO_DIR / "data" / "bandai_mini_compositional")
