@@ -43,6 +43,8 @@ def find_checkpoint(spec: str, output_dir: str | Path, condition: str = "text") 
             raise UsageError(f"the shipped {condition} model {shipped} is missing: restore it with "
                              "`git checkout -- checkpoints`")  # fmt: skip
         return shipped
+    if spec in SHIPPED_MODELS and not Path(spec).is_file():  # the Python API's names work here too ("text", "action")
+        return find_checkpoint("shipped", output_dir, spec)
     if spec not in ("latest", "best"):
         path = Path(spec)
         if not path.is_file():

@@ -46,8 +46,11 @@ MODELS_DIR = REPO_DIR / "checkpoints" / "models"
 
 
 def resolve_model(name_or_path: str | Path) -> Path:
-    """A released model's name ("text", "action", or a file stem in checkpoints/models) or a .ckpt/.safetensors path."""
+    """A released model's name ("text", "action", or a file stem in checkpoints/models; "shipped", as on the command
+    line, is the text model) or a .ckpt/.safetensors path."""
     key = str(name_or_path)
+    if key == "shipped":
+        key = "text"
     if key in SHIPPED_MODELS:
         path = SHIPPED_MODELS[key]
     elif (MODELS_DIR / f"{key}.safetensors").is_file():

@@ -39,6 +39,17 @@ class MotionOutput:
     def __len__(self) -> int:
         return len(self.joints)
 
+    def __repr__(self) -> str:
+        """One line: how many motions, their lengths, the skeleton and the prompts (never the arrays)."""
+        frames = sorted({len(j) for j in self.joints})
+        lengths = ", ".join(f"{f / self.fps:g} s" for f in frames[:4]) + (", ..." if len(frames) > 4 else "")
+        prompts = list(dict.fromkeys(self.prompts))
+        shown = ", ".join(repr(p) for p in prompts[:3]) + (
+            f", ... ({len(prompts)} prompts)" if len(prompts) > 3 else ""
+        )
+        return (f"MotionOutput({len(self)} motion(s) of {lengths} at {self.fps:g} fps on {self.skeleton.name} "
+                f"({self.skeleton.num_joints} joints); prompts: {shown})")  # fmt: skip
+
     def seconds(self, i: int = 0) -> float:
         return len(self.joints[i]) / self.fps
 

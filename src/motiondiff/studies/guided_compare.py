@@ -44,7 +44,6 @@ ABLATION = {
 MDM_ROW = "MDM (x0, DDIM-{steps})"
 
 
-
 def local_latents(latent, mdm, graphs, frames: int, generator: torch.Generator, steps: int = 50) -> torch.Tensor:
     """(B, A_max, Q_a, D') standardised action-level latents c^k: one MDM motion per local description of each
     caption graph (all descriptions in batched calls), zero rows past a caption's action count."""

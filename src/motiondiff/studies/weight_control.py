@@ -32,7 +32,6 @@ MOVING = ("walk", "run", "dash", "jog", "step")
 FRAMES = 160  # 8 s at 20 fps: long enough for three local actions, within the complex split's 150-196 frames
 
 
-
 def guided_index(texts: list[str]) -> int:
     return next((k for k, t in enumerate(texts) if any(w in t.lower() for w in MOVING)), 0)
 
