@@ -88,12 +88,23 @@ def test_inbetween_a_long_shared_bandai_bvh(text_ckpt, tmp_path, shared):
     assert res["samples"][0]["kept_max_error_m"] <= TOL
 
 
-def test_body_part_editing_keeps_the_lower_body(text_ckpt, tmp_path):
-    out, res = _edit(tmp_path, text_ckpt, f"input={CLIP_ID}", "kind=parts", "parts=lower_body", "mode=repaint",
+def test_body_part_editing_regenerates_the_upper_body_as_the_api_does(text_ckpt, tmp_path):
+    """parts= names the regenerated parts on the command line as in `MotionPipeline.edit_parts`: both keep the same
+    joints of the input, exactly."""
+    from motiondiff.pipelines import MotionPipeline
+
+    out, res = _edit(tmp_path, text_ckpt, f"input={CLIP_ID}", "kind=parts", "parts=upper_body", "mode=repaint",
                      "text=a person raises both hands", "clip_x0=static")  # fmt: skip
     assert res["settings"]["clip_x0"] == "static"  # safe x̂0 is a switch of edit.py too
     lower, upper = list(SMPL22.parts["lower_body"]), list(SMPL22.parts["upper_body"])
     assert res["settings"]["kept_joints"] == [SMPL22.joint_names[j] for j in lower]
+    assert res["settings"]["regenerated_joints"] == [SMPL22.joint_names[j] for j in upper]
+    api = MotionPipeline.from_pretrained(text_ckpt).edit_parts(CLIP_ID, "a person raises both hands",
+                                                               parts="upper_body", steps=2, mode="repaint")  # fmt: skip
+    assert api.info["kept_joints"] == res["settings"]["kept_joints"]
+    cli_joints = np.load(res["samples"][0]["joints"])
+    n = min(len(cli_joints), len(api.joints[0]))
+    assert _max_error(cli_joints[:n], api.joints[0][:n], joints=lower) <= 1e-6
     for row in res["samples"]:
         joints, inputs = np.load(row["joints"]), np.load(row["input_joints"])
         rel, rel_in = joints - joints[:, :1], inputs - inputs[:, :1]
@@ -105,7 +116,7 @@ def test_body_part_editing_keeps_the_lower_body(text_ckpt, tmp_path):
 def test_joints_npy_input_a_window_and_videos(text_ckpt, tmp_path, clip):
     npy = tmp_path / "walk_joints.npy"
     np.save(npy, clip["joints"])
-    out, res = _edit(tmp_path, text_ckpt, f"input={npy}", "kind=parts", "parts=[left_leg,right_leg,pelvis]",
+    out, res = _edit(tmp_path, text_ckpt, f"input={npy}", "kind=parts", "parts=[torso,arms,head]",
                      "length=1", "num_samples=1", "export=gif")  # fmt: skip
     row = res["samples"][0]
     inputs = np.load(row["input_joints"])

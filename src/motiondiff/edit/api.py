@@ -3,7 +3,7 @@
     from motiondiff.edit import load_input_motion, inbetween, edit_parts
     motion = load_input_motion("test:dataset-1_walk_active_001", module)
     result = inbetween(module, motion, "a person jumps", prefix=0.25, suffix=0.25, num_samples=3, seed=0)
-    result = edit_parts(module, motion, "lower_body", "a person raises both hands", mode="repaint")
+    result = edit_parts(module, motion, "upper_body", "a person raises both hands", mode="repaint")
 
 Inputs come from ``edit.inputs``; results hold de-normalised features, decoded joints of the representation's
 skeleton and the masks of what was kept. ``condition=None`` edits without a condition (the model's ∅ condition,
@@ -207,7 +207,7 @@ def inbetween(
 def edit_parts(
     module,
     motion: InputMotion | list[InputMotion],
-    parts: str | int | list = "lower_body",
+    parts: str | int | list = "upper_body",
     condition: Any = None,
     *,
     num_samples: int = 1,
@@ -216,21 +216,25 @@ def edit_parts(
     progress: bool = False,
     **sampling: Any,
 ) -> EditResult:
-    """Keep the body ``parts`` of each motion (a preset of the representation's skeleton such as 'lower_body', joint
-    names/indices, or a list of them) over every frame and generate the rest of the body (MDM's body-part editing:
-    keep lower_body - legs and root trajectory - and regenerate the upper body from the text)."""
+    """Regenerate the body ``parts`` of each motion from ``condition`` (a preset of the representation's skeleton
+    such as 'upper_body', joint names/indices, or a list of them) and keep the rest of the body over every frame
+    (MDM's body-part editing, named like its ``--edit_mode upper_body``: the legs and root trajectory are kept).
+    ``parts`` means the same in sample.py's edit command, `MotionPipeline.edit_parts` and the demo."""
     motions, conds, options = _prepare(module, motion, condition, num_samples, sampling)
     settings = options.as_dict()
     rep: Representation = module.representation
-    joints = resolve_joints(rep.skeleton, parts)
+    regenerated = set(resolve_joints(rep.skeleton, parts))
+    joints = tuple(j for j in range(rep.skeleton.num_joints) if j not in regenerated)
+    if not joints:
+        raise EditError(f"the parts {parts!r} are the whole body ({rep.skeleton.name}), leaving nothing to keep: "
+                        "generate a new motion instead (sample.py)")  # fmt: skip
     dims = part_keep(rep, joints)
     if dims.all():
-        raise EditError(
-            f"the parts {parts!r} cover the whole {rep.skeleton.name} skeleton, leaving nothing to generate"
-        )
+        raise EditError(f"the parts {parts!r} leave the whole {rep.skeleton.name} motion kept, nothing to generate")
     keeps = [np.repeat(dims[None], m.num_frames, axis=0) for m in motions]
     kept_frames = [np.zeros(m.num_frames, dtype=bool) for m in motions]
     settings.update(kind="parts", parts=parts if isinstance(parts, str | int) else list(parts),
+                    regenerated_joints=[rep.skeleton.joint_names[j] for j in sorted(regenerated)],
                     kept_joints=[rep.skeleton.joint_names[j] for j in joints], seed=seed, num_samples=num_samples)  # fmt: skip
     gen = _generator(module, generator, seed)
     features = _inpaint_motions(module, motions, keeps, conds, num_samples, options, gen, progress)

@@ -188,11 +188,7 @@ class MotionPipeline:
         the rest of the body as it is, over every frame (MDM's body-part editing). ``up_axis``, ``smpl_model`` as in
         `inbetween`."""
         source = self._input(motion, up_axis, smpl_model)
-        try:
-            kept = _complement_parts(self.model.representation.skeleton, parts)
-        except EditError as err:
-            raise UsageError(str(err)) from None
-        return self._edited(_edit_parts, source, prompt, {"parts": kept}, num_samples, seed, sampling)
+        return self._edited(_edit_parts, source, prompt, {"parts": parts}, num_samples, seed, sampling)
 
     # ---- helpers ------------------------------------------------------------------------------------------------
     def _edited(self, fn, source: InputMotion, prompt, options: dict, num_samples, seed, sampling) -> MotionOutput:
@@ -283,14 +279,3 @@ def _is_timed(item) -> bool:
         return bool(sep) and bool(text.strip()) and float(tail) > 0
     except ValueError:
         return False
-
-
-def _complement_parts(skeleton, parts) -> list[int]:
-    """The joints to keep when ``parts`` are regenerated."""
-    from motiondiff.edit.masks import resolve_joints
-
-    regenerate = set(resolve_joints(skeleton, parts))
-    kept = [j for j in range(skeleton.num_joints) if j not in regenerate]
-    if not kept:
-        raise EditError(f"{parts!r} is the whole body: generate a new motion with the pipeline's call instead")
-    return kept

@@ -3,7 +3,7 @@
     python -m motiondiff.studies.editing [checkpoint=latest] [num_edits=20] [num_part_edits=10] [split=test]
         [modes=[overwrite,repaint]] [sampler=ddim] [steps=50] [guidance=...] [resample=1] [boundary_blend=16]
         [hold_from=1] [reconstruction=0] [seed=0] [data=<prepared folder>] ["text='a person raises both hands'"]
-        [parts=lower_body] [out=<folder>] [device=cpu]          (every key and its default: conf/study/editing.yaml)
+        [parts=upper_body] [out=<folder>] [device=cpu]          (every key and its default: conf/study/editing.yaml)
 
 (a) In-betweening of ``num_edits`` clips of the split (first and last 25% kept, each clip's own caption or action as
     the condition, boundaries blended over ``boundary_blend`` frames; with a blend, the same edits also without it):
@@ -329,7 +329,7 @@ def format_report(report: dict, checkpoint: str = "") -> str:
     n = len(report["parts_clips"])
     lines += [
         "",
-        f"## (b) Body-part editing: `{report['parts']}` kept on {n} walking clips, condition {report['text']!r}",
+        f"## (b) Body-part editing: `{report['parts']}` regenerated on {n} walking clips, condition {report['text']!r}",
         "",
         f"Wrists up = both wrists above the head for >= {WRISTS_UP_SHARE:.0%} of the frames (feature skeleton). "
         f"Unedited inputs with wrists up: {report['inputs_wrists_up']} of {n}. Smoothness: vvMDM's (1 = no "
