@@ -137,3 +137,30 @@ def test_the_checks_fail_on_a_planted_violation(extra, expect):
         assert _layer_violations(edges)
     else:
         assert any("motiondiff.data.representations.clip" in c for c in _cycles(edges))
+
+
+# the generation commands are thin shells (issue 40): what they share lives in non-command modules (cli.common,
+# cli.outputs, cli.validate, cli.prompt_inputs) or below, never in another command or a study
+SHELLS = ("motiondiff.cli.sample", "motiondiff.cli.edit", "motiondiff.cli.sample_guided")
+COMMANDS = (*SHELLS, "motiondiff.cli.evaluate", "motiondiff.cli.train", "motiondiff.cli.train_vae",
+            "motiondiff.cli.train_latent", "motiondiff.cli.train_evaluator", "motiondiff.cli.preset_audit",
+            "motiondiff.cli.demo")  # fmt: skip
+
+
+def _shell_violations(edges) -> list[str]:
+    return sorted(f"{src} imports {dst}" for src in SHELLS for dst in edges.get(src, ())
+                  if (dst in COMMANDS and dst != src) or dst.startswith("motiondiff.studies"))  # fmt: skip
+
+
+def test_the_generation_commands_import_no_other_command_and_no_study():
+    bad = _shell_violations(graph())
+    assert not bad, "commands that borrow from another command or a study:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("extra", [{"motiondiff.cli.edit": {"motiondiff.cli.sample"}},
+                                   {"motiondiff.cli.sample": {"motiondiff.studies.behaviour"}}])  # fmt: skip
+def test_the_shell_check_fails_on_a_planted_borrowing(extra):
+    edges = {k: set(v) for k, v in graph().items()}
+    for k, v in extra.items():
+        edges[k] = edges.get(k, set()) | v
+    assert _shell_violations(edges)

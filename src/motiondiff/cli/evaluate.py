@@ -21,7 +21,7 @@ from omegaconf import DictConfig
 from tqdm import tqdm
 
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps, to_dict
-from motiondiff.cli.sample import smoothing_sigma
+from motiondiff.cli.outputs import smoothing_sigma
 from motiondiff.cli.validate import RULES_EVALUATE, check
 from motiondiff.edit.smoothing import SMOOTHABLE
 from motiondiff.eval import action_table, official, report

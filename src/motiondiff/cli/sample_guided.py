@@ -44,7 +44,7 @@ def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, 
 
 
 def run(cfg: DictConfig) -> Path:
-    from motiondiff.cli.sample import cleanup_option, export_formats, render_option, save_samples, smoothing_sigma
+    from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, save_samples, smoothing_sigma
     from motiondiff.cli.validate import RULES_SAMPLE, check
     from motiondiff.export.outputs import check_formats_for
     from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples

@@ -22,6 +22,7 @@ import torch
 from omegaconf import OmegaConf
 
 from motiondiff.data.preparing.captions import measure
+from motiondiff.edit.measures import mean_joint_acceleration, mean_joint_speed
 from motiondiff.paths import CONF_DIR
 from motiondiff.pipelines import MotionPipeline
 
@@ -110,17 +111,6 @@ class Behaviour:
 
     def in_place(self) -> np.ndarray:
         return self.travel <= 0.5
-
-
-def mean_joint_speed(joints: np.ndarray, fps: float) -> float:
-    return float(np.linalg.norm(np.diff(joints, axis=0), axis=-1).mean() * fps)
-
-
-def mean_joint_acceleration(joints: np.ndarray, fps: float) -> float:
-    """Mean norm of the joints' second differences in m/s^2 (0 for clips under 3 frames)."""
-    if len(joints) < 3:
-        return 0.0
-    return float(np.linalg.norm(np.diff(joints, n=2, axis=0), axis=-1).mean() * fps**2)
 
 
 def generate(

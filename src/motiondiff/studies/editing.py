@@ -33,60 +33,14 @@ import numpy as np
 import torch
 
 from motiondiff.atomic import finite_or_null, write_json
+from motiondiff.edit.measures import SPEED_FLOOR, boundary_jumps, edit_numbers
 from motiondiff.edit.smoothing import smoothness_of_joints
 
-SPEED_FLOOR = 0.1  # m/s: the least "median generated speed" a boundary jump is divided by
 MAX_RATIO = 3.0  # a boundary step at most 3x the generated middle's typical speed counts as seamless
 WRISTS_UP_SHARE = 0.25  # share of frames with both wrists above the head that counts as "hands raised"
 
 
-# ---- measurements -------------------------------------------------------------------------------------------------
-def step_speeds(joints: np.ndarray, fps: float) -> np.ndarray:
-    """(N-1,) speed of each frame-to-frame step, mean over joints of |x_{k+1} - x_k| · fps (m/s)."""
-    return np.linalg.norm(np.diff(np.asarray(joints, dtype=np.float64), axis=0), axis=-1).mean(-1) * fps
-
-
-def kept_max_error(joints: np.ndarray, input_joints: np.ndarray, kept: np.ndarray) -> float:
-    """Largest distance (m) between edited and input joints where ``kept`` ((N, J) bool) fixes them."""
-    dist = np.linalg.norm(np.asarray(joints, np.float64) - np.asarray(input_joints, np.float64), axis=-1)
-    return float(dist[kept].max()) if kept.any() else 0.0
-
-
-def root_relative_max_error(joints: np.ndarray, input_joints: np.ndarray, kept_joints) -> float:
-    """Largest distance (m) of the kept joints relative to the root (joint 0), over every frame."""
-    rel = np.asarray(joints, np.float64) - np.asarray(joints, np.float64)[:, :1]
-    rel_in = np.asarray(input_joints, np.float64) - np.asarray(input_joints, np.float64)[:, :1]
-    idx = list(kept_joints)
-    return float(np.linalg.norm(rel[:, idx] - rel_in[:, idx], axis=-1).max()) if idx else 0.0
-
-
-def velocity_changes(joints: np.ndarray, fps: float) -> np.ndarray:
-    """(N-2,) change of velocity between consecutive steps, mean over joints of |Δx_{k+1} − Δx_k| · fps (m/s)."""
-    steps = np.diff(np.asarray(joints, dtype=np.float64), axis=0)
-    return np.linalg.norm(np.diff(steps, axis=0), axis=-1).mean(-1) * fps
-
-
-def boundary_jumps(joints: np.ndarray, kept_frames: np.ndarray, fps: float, floor: float = SPEED_FLOOR) -> dict:
-    """Each kept/generated boundary's step speed over the generated middle's median step speed (module docstring),
-    and the change of velocity there: the larger of the changes into and out of the boundary step, over the same
-    scale ("change_ratio"; a kept part that ends in a fast kick has a fast boundary step however seamless the edit,
-    its velocity change is what a seam adds). Returns {"median_generated_speed", "boundaries": [{"frame", "side",
-    "speed", "ratio", "speed_change", "change_ratio"}]}; "frame" is the first frame after the boundary, "side"
-    "start" (kept -> generated) or "end" (generated -> kept)."""
-    speeds, changes = step_speeds(joints, fps), velocity_changes(joints, fps)
-    kept = np.asarray(kept_frames, dtype=bool)
-    middle = ~kept[:-1] & ~kept[1:]
-    median = float(np.median(speeds[middle])) if middle.any() else 0.0
-    scale = max(median, floor)
-    rows = []
-    for k in np.flatnonzero(kept[:-1] != kept[1:]):  # step k crosses the boundary; changes[k-1], changes[k] touch it
-        change = float(max(changes[max(k - 1, 0) : k + 1], default=0.0))
-        rows.append({"frame": int(k + 1), "side": "start" if kept[k] else "end", "speed": float(speeds[k]),
-                     "ratio": float(speeds[k] / scale), "speed_change": change,
-                     "change_ratio": change / scale})  # fmt: skip
-    return {"median_generated_speed": median, "boundaries": rows}
-
-
+# ---- measurements (the per-edit ones: motiondiff.edit.measures) ------------------------------------------------------
 def wrists_up_share(joints: np.ndarray, skeleton) -> float:
     """Share of frames with both wrists (last joint of each arm preset) above the head (last head joint)."""
     head = skeleton.parts["head"][-1]
@@ -116,27 +70,6 @@ def low_noise_error(module, motions, t: int = 20, seed: int = 0) -> dict:
             pred.append(float(np.linalg.norm(est - ref, axis=-1).mean()))
             ident.append(float(np.linalg.norm(inp - ref, axis=-1).mean()))
     return {"t": t, "clips": len(pred), "x0_hat_mpjpe_m": float(np.mean(pred)), "x_t_mpjpe_m": float(np.mean(ident))}
-
-
-def edit_numbers(result, i: int, fps: float) -> dict:
-    """What results.json reports per edit: kept-part error, and boundary jumps (in-betweening) or the kept joints'
-    root-relative error (body parts)."""
-    joints, inputs = result.joints[i], result.input_joints[i]
-    row = {"kept_max_error_m": kept_max_error(joints, inputs, result.kept_points(i))}
-    if result.kind == "inbetween":
-        kept = result.kept_frames[i]
-        jumps = boundary_jumps(joints, kept, fps)
-        row.update(
-            jumps,
-            max_boundary_ratio=max((b["ratio"] for b in jumps["boundaries"]), default=0.0),
-            max_change_ratio=max((b["change_ratio"] for b in jumps["boundaries"]), default=0.0),
-        )
-        # a jittery middle makes every boundary look small next to it: its speed next to the input's tells
-        middle = ~kept[:-1] & ~kept[1:]
-        row["median_input_speed"] = float(np.median(step_speeds(inputs, fps)[middle])) if middle.any() else 0.0
-    else:
-        row["root_relative_kept_max_error_m"] = root_relative_max_error(joints, inputs, result.kept_joints)
-    return row
 
 
 # ---- the acceptance run -------------------------------------------------------------------------------------------

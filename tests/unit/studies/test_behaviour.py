@@ -8,7 +8,8 @@ from fixtures.synthetic_motion import glide as _walk
 from fixtures.synthetic_motion import rest_pose as _rest_pose
 
 from motiondiff.data.datamodules import embedded_data_root
-from motiondiff.studies.behaviour import Behaviour, mean_joint_acceleration, mean_joint_speed, real_clips
+from motiondiff.edit.measures import mean_joint_acceleration, mean_joint_speed
+from motiondiff.studies.behaviour import Behaviour, real_clips
 
 
 def test_walk_and_raise_are_told_apart():

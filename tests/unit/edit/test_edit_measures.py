@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motiondiff.studies.editing import boundary_jumps, step_speeds, velocity_changes
+from motiondiff.edit.measures import boundary_jumps, step_speeds, velocity_changes
 
 FPS = 20.0
 
