@@ -4,7 +4,6 @@ sampling, the file stems of prompts, and writing each sample's joints, features,
 
 from __future__ import annotations
 
-import re
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,31 +18,12 @@ from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.edit.measures import mean_joint_speed
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.errors import UsageError
+from motiondiff.export.naming import slug, unique_stems  # noqa: F401  (the commands' names for their files)
 from motiondiff.export.outputs import export_features, parse_formats
 from motiondiff.export.smpl_mesh import render_body
 
 if TYPE_CHECKING:
     from motiondiff.lit.motion_diffusion import MotionDiffusion
-
-
-def slug(text: str | None) -> str:
-    return re.sub(r"[^a-z0-9]+", "_", (text or "unconditioned").lower()).strip("_")[:48] or "prompt"
-
-
-def unique_stems(prompts: list[str | None]) -> list[str]:
-    """One file stem per prompt, distinct even where prompts slug alike (emoji-only text, the same first 48
-    characters): the second gets ``_2``, the third ``_3``, ... so no prompt's files overwrite another's."""
-    taken: set[str] = set()
-    stems = []
-    for prompt in prompts:
-        base = stem = slug(prompt)
-        n = 1
-        while stem in taken:
-            n += 1
-            stem = f"{base}_{n}"
-        taken.add(stem)
-        stems.append(stem)
-    return stems
 
 
 def export_formats(cfg: DictConfig) -> list[str]:

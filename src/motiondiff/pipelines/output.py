@@ -3,7 +3,6 @@ export or show them."""
 
 from __future__ import annotations
 
-import re
 import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -13,14 +12,10 @@ import numpy as np
 from motiondiff.atomic import finite_or_null, save_npy, write_json
 from motiondiff.data.representations import Representation
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
+from motiondiff.export.naming import motion_stems
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
 from motiondiff.export.smpl_mesh import render_body
 from motiondiff.skeleton import Skeleton
-
-
-def _stem(text: str | None, index: int) -> str:
-    words = re.sub(r"[^a-z0-9]+", "_", (text or "unconditioned").lower()).strip("_")[:48] or "motion"
-    return f"{index:02d}_{words}"
 
 
 @dataclass
@@ -73,8 +68,9 @@ class MotionOutput:
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         rows = []
+        stems = motion_stems(self.prompts)  # the commands' scheme: <prompt>_<k>
         for i, (joints, feats, prompt) in enumerate(zip(self.joints, self.features, self.prompts, strict=True)):
-            stem = folder / _stem(prompt, i)
+            stem = folder / stems[i]
             save_npy(f"{stem}_joints.npy", joints.astype(np.float32))
             save_npy(f"{stem}_features.npy", feats.astype(np.float32))
             exports = export_features(stem, self.representation, feats, self.fps, formats, title=prompt or "",

@@ -45,6 +45,7 @@ def test_the_default_sampler_is_the_models_own(pipe, monkeypatch):
 def test_save_and_export(pipe, tmp_path):
     out = pipe("a person walks forward", seconds=2, steps=3)
     rows = out.save(tmp_path / "walk", formats=["bvh", "html"])
+    assert rows[0]["joints"].endswith("walk/a_person_walks_forward_00_joints.npy")  # as sample.py names it
     assert np.load(rows[0]["joints"]).shape == (40, 22, 3)
     assert read_bvh(rows[0]["exports"]["bvh"]).num_frames == 40
     assert (tmp_path / "walk" / "results.json").is_file() and rows[0]["exports"]["html"].endswith(".html")
