@@ -84,11 +84,6 @@ def load_latent_release(path: str | Path, device: str = "cpu"):
     return module.to(device).eval()
 
 
-def release_class(path: str | Path) -> str:
-    """The class a release names (after the checks that need no model): MotionDiffusionModule or the latent's."""
-    return check_release_files(path)["class"]
-
-
 def _checked_release(path: str | Path, expected: str) -> tuple[dict, dict]:
     """(JSON, weights) of a release of class `expected`, every check passed; another class is one clear error."""
     weights, config = release_paths(path)

@@ -137,19 +137,10 @@ def _keys_problem(unknown: list, missing: list, allowed) -> str:
     return ", ".join(parts) + f" (keys: {', '.join(sorted(allowed))})"
 
 
-def _module_parameters() -> tuple[set, set]:
-    """(every, required) hyper-parameter name of MotionDiffusion (and so of MotionDiffusionModule)."""
+def _check_hparams(h: dict, where: str) -> None:
     from motiondiff.lit.motion_diffusion import MotionDiffusion
 
-    params = list(inspect.signature(MotionDiffusion.__init__).parameters.values())[1:]
-    return {p.name for p in params}, {p.name for p in params if p.default is inspect.Parameter.empty}
-
-
-def _check_hparams(h: dict, where: str) -> None:
-    every, required = _module_parameters()
-    unknown, missing = sorted(set(h) - every), sorted(required - set(h))
-    if unknown or missing:
-        raise UsageError(f"{where}: hparams has {_keys_problem(unknown, missing, every)}; {RESTORE}")
+    _check_keys(h, MotionDiffusion, where)
 
     def fail(key: str, want: str):
         raise UsageError(f"{where}: hparams.{key}={_shown(_get(h, key))} must be {want}; {RESTORE}")
@@ -194,6 +185,7 @@ def _check_hparams(h: dict, where: str) -> None:
 
 
 def _check_keys(h: dict, cls, where: str, prefix: str = "hparams") -> None:
+    """Refuse keys ``cls.__init__`` does not take, and required ones that are missing."""
     params = list(inspect.signature(cls.__init__).parameters.values())[1:]
     every = {p.name for p in params}
     required = {p.name for p in params if p.default is inspect.Parameter.empty}

@@ -11,13 +11,14 @@ from omegaconf import DictConfig, ListConfig
 
 from motiondiff.atomic import finite_or_null, save_npy, write_json
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps
-from motiondiff.cli.outputs import cleanup_option, export_formats, slug
+from motiondiff.cli.outputs import cleanup_option, export_formats
 from motiondiff.cli.validate import RULES_EDIT, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
 from motiondiff.edit.cleanups import apply_cleanups, check_for_edit
 from motiondiff.edit.inputs import InputMotion, clip_data_root, load_input_motion, read_bvh_input
 from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.edit.measures import edit_numbers
+from motiondiff.export.naming import slug
 from motiondiff.export.outputs import check_formats_for, export_features
 from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action

@@ -1,6 +1,6 @@
 """What the generation commands (sample.py, edit.py, sample.py method=guidedmotion) share about their outputs: the
 output options of a config (export formats, render body, clean-ups, temporal smoothing), checked before any
-sampling, the file stems of prompts, and writing each sample's joints, features, exports and measured facts."""
+sampling, and writing each sample's joints, features, exports and measured facts."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.edit.measures import mean_joint_speed
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.errors import UsageError
-from motiondiff.export.naming import slug, unique_stems  # noqa: F401  (the commands' names for their files)
+from motiondiff.export.naming import slug
 from motiondiff.export.outputs import export_features, parse_formats
 from motiondiff.export.smpl_mesh import render_body
 

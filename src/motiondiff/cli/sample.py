@@ -30,15 +30,14 @@ from motiondiff.cli.outputs import (
     export_formats,
     render_option,
     save_samples,
-    slug,
     smoothing_sigma,
-    unique_stems,
 )
 from motiondiff.cli.prompt_inputs import check_one_source, read_prompts_file, split_timed
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.edit.inpaint import EDIT_MODES
 from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints
+from motiondiff.export.naming import slug, unique_stems
 from motiondiff.export.outputs import check_formats_for
 from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, generation_frames, repeated

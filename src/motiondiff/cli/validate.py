@@ -107,7 +107,8 @@ RULES_EVALUATE = {
     **COMMON, "replications": POSITIVE_INT, "mm_replications": Rule(int, low=0), "guidance": Rule(float, low=0, optional=True),
     "steps": Rule(int, low=1, optional=True), "batch_size": POSITIVE_INT,
     "evaluator": Rule(str, choices=("released", "official")),
-    "prompt_mapping": Rule(str, choices=("none", "nearest", "vote")),
+    "prompt_mapping": Rule(str, choices=("none", "nearest", "vote")),  # text.prompt_mapping.MODES; importing
+    # motiondiff.text would load the encoders (1.5 s) before any check (tests/unit/text/test_prompt_mapping.py)
 }  # fmt: skip
 
 

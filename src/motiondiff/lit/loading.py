@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motiondiff.checked_loading import CKPT_FIX, check_same_shapes, reading
+from motiondiff.checked_loading import CKPT_FIX, check_finite_state, check_same_shapes, reading
+from motiondiff.errors import UsageError
 from motiondiff.lit.motion_diffusion import MotionDiffusion
 from motiondiff.model_file_checks import checkpoint_state
 from motiondiff.paths import RELEASE_SUFFIXES
-from motiondiff.release import load_release
+from motiondiff.release import load_latent_release, load_release
 
 
 def load_model(path: str | Path, device: str = "cpu") -> MotionDiffusion:
@@ -34,10 +35,7 @@ LATENT_FIX = "give the .ckpt that train_latent.py wrote or a GuidedMotion releas
 def load_latent_model(path: str | Path, device: str = "cpu"):
     """GuidedMotion's latent model (with its three VAEs) in eval mode: a train_latent.py checkpoint (read without
     running pickled code) or a release. A file that is neither, or holds NaN weights, is one UsageError."""
-    from motiondiff.checked_loading import check_finite_state
-    from motiondiff.errors import UsageError
-    from motiondiff.lit.latent import HierarchicalLatentModule
-    from motiondiff.release import load_latent_release
+    from motiondiff.lit.latent import HierarchicalLatentModule  # Lightning: only where a latent model loads
 
     path = Path(path)
     if not path.is_file():

@@ -76,3 +76,10 @@ def test_a_mode_needs_its_bank(tmp_path):
         load_prompt_mapping(tmp_path / "model.safetensors", "vote")
     with pytest.raises(UsageError, match="choose one of"):
         load_prompt_mapping(tmp_path / "model.safetensors", "closest")
+
+
+def test_evaluate_checks_the_same_modes():
+    from motiondiff.cli.validate import RULES_EVALUATE
+    from motiondiff.text.prompt_mapping import MODES
+
+    assert RULES_EVALUATE["prompt_mapping"].options == MODES
