@@ -25,7 +25,6 @@ from motiondiff.data.representations import Representation, get_representation
 from motiondiff.data.representations.clip import ClipSplit, LabelledClip
 from motiondiff.data.representations.hml_features import mean_std
 from motiondiff.data.representations.spec import HMLBridge, bridge_from_spec, representation_spec
-from motiondiff.data.sources.humanml3d import HUMANML3D, KIT, OfficialLayout, load_official_split
 from motiondiff.skeleton import SMPL22
 
 log = logging.getLogger(__name__)
@@ -172,65 +171,6 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
 
     def predict_dataloader(self) -> DataLoader:
         return self._loader("test")
-
-
-class OfficialLayoutDataModule(MotionDataModule):
-    """A root in the official HumanML3D/KIT-ML layout (see `motiondiff.data.sources.humanml3d`)."""
-
-    layout: OfficialLayout
-
-    def __init__(
-        self,
-        root: str | Path,
-        batch_size: int = 64,
-        num_workers: int = 0,
-        max_frames: int | None = None,
-        unit_length: int | None = None,
-        seed: int = 0,
-        representation: str | None = None,
-        bucketing: bool = False,
-        bucket_chunk: int = 64,
-    ):
-        native = "hml263" if self.layout.num_joints == 22 else "kit251"
-        if representation not in (None, native):
-            raise ValueError(
-                f"representation={representation}: the official {self.layout.name} layout stores {native} features "
-                f"(new_joint_vecs) only, so use representation={native} (or leave it unset); the rotation and joint-"
-                "position representations need a dataset with rotations (humanact12, uestc, bandai, bvh)"
-            )
-        super().__init__(
-            batch_size=batch_size,
-            num_workers=num_workers,
-            max_frames=self.layout.max_motion_len if max_frames is None else max_frames,
-            unit_length=self.layout.unit_length if unit_length is None else unit_length,
-            seed=seed,
-            bucketing=bucketing,
-            bucket_chunk=bucket_chunk,
-        )
-        self.root = Path(root)
-
-    def load_split(self, split: str) -> SplitData:
-        return load_official_split(self.root, split, dataset=self.layout.key)
-
-    @property
-    def feature_dim(self) -> int:
-        return self.layout.feature_dim  # known before setup(): models are built from it
-
-    @property
-    def num_joints(self) -> int:
-        return self.layout.num_joints
-
-    @property
-    def fps(self) -> float:
-        return self.layout.fps
-
-
-class HumanML3DDataModule(OfficialLayoutDataModule):
-    layout = HUMANML3D
-
-
-class KITDataModule(OfficialLayoutDataModule):
-    layout = KIT
 
 
 class ClipDataModule(MotionDataModule, abc.ABC):

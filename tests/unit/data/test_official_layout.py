@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import torch
 
-from motiondiff.data.datamodules import HumanML3DDataModule, KITDataModule
+from motiondiff.data.official_datamodules import HumanML3DDataModule, KITDataModule
 from motiondiff.data.sources.errors import DatasetNotFoundError
 from motiondiff.data.sources.humanml3d import KIT, load_official_split, parse_caption_line, read_split_ids
 
