@@ -19,6 +19,12 @@ REPO_DIR = BUNDLED_DIR if INSTALLED else PACKAGE_DIR.parents[1]  # conf/, checkp
 CONF_DIR = REPO_DIR / "conf"
 
 
+def shown(path: str | Path) -> str:
+    """A path as a committed report names it: repo-relative where possible, never this machine's folders."""
+    path = Path(path).resolve()
+    return str(path.relative_to(REPO_DIR)) if path.is_relative_to(REPO_DIR) else str(path)
+
+
 def work_dir() -> Path:
     """Where outputs/ and .cache/ go: the checkout, or the current folder for an installed package."""
     return Path.cwd() if INSTALLED else REPO_DIR
@@ -26,7 +32,7 @@ def work_dir() -> Path:
 
 # checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
 SHIPPED_MODELS = {
-    "text": REPO_DIR / "checkpoints" / "models" / "bandai_text_cpu.safetensors",  # docs/results/shipping/rules.md
+    "text": REPO_DIR / "checkpoints" / "models" / "bandai_text_long_12k.safetensors",  # docs/results/shipping/rules.md
     "action": REPO_DIR / "checkpoints" / "models" / "bandai_action_cpu.safetensors",
 }
 SHIPPED_MODEL = SHIPPED_MODELS["text"]

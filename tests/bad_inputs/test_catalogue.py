@@ -198,7 +198,8 @@ CASES = [
     Case("evaluate_smoothing_negative", lambda tmp: run_entry("evaluate", tmp, "checkpoint=shipped", "smooth_sigma=-1", "wandb=false"),
          UsageError, "smooth_sigma is a Gaussian's width in frames"),
     Case("clip_x0_unknown_rule", sample("text=walk", "clip_x0=imagen"), UsageError, "choose none, static or dynamic"),
-    Case("clip_x0_on_a_model_without_range", sample("text=walk", "clip_x0=static"), UsageError, "has no x0 range"),
+    Case("clip_x0_on_a_model_without_range", lambda tmp: run_entry("sample", tmp, f"checkpoint={REPO}/checkpoints/models/bandai_text_cpu.safetensors",
+                                                                   "export=none", "text=walk", "clip_x0=static"), UsageError, "has no x0 range"),
     # commands: train.py
     Case("batch_size_zero", train("batch_size=0"), UsageError, "batch_size=0: must be an integer >= 1"),
     Case("batch_size_not_a_number", train("batch_size=abc"), UsageError, "batch_size='abc'"),

@@ -15,6 +15,8 @@ import torch
 from cli_helpers import REPO, TINY, run_cli
 from fixtures.in_process import run_entry, user_error
 
+from motiondiff.paths import SHIPPED_MODELS
+
 
 def test_train_writes_checkpoint_and_logs(text_ckpt):
     run = text_ckpt.parents[1]
@@ -176,7 +178,7 @@ def test_shipped_model_samples_with_every_export(tmp_path):
             "sampler.steps=3", "export=[bvh,html]", env_dir=tmp_path)  # fmt: skip
     out = next((tmp_path / "outputs" / "sample").iterdir())
     summary = json.loads((out / "results.json").read_text())
-    assert summary["checkpoint"].endswith("bandai_text_cpu.safetensors")
+    assert summary["checkpoint"].endswith(SHIPPED_MODELS["text"].name)
     (row,) = summary["samples"]
     exports = row["exports"]
     assert set(exports) >= {"bvh", "html"} and row["video"] is None

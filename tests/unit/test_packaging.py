@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from motiondiff.paths import SHIPPED_MODELS
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -29,8 +31,8 @@ def test_wheel_bundles_configs_models_data_and_commands(tmp_path):
     for needed in (
         "conf/sample.yaml",
         "conf/paths/default.yaml",
-        "checkpoints/models/bandai_text_cpu.safetensors",
-        "checkpoints/models/bandai_text_cpu.coverage.safetensors",
+        f"checkpoints/models/{SHIPPED_MODELS['text'].name}",
+        f"checkpoints/models/{SHIPPED_MODELS['text'].stem}.coverage.safetensors",
         "checkpoints/evaluators/bandai_mini/text_motion.safetensors",
         "data/bandai_mini/meta.json",
     ):

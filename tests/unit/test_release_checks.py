@@ -21,7 +21,7 @@ from motiondiff.release_checks import check_release_meta, read_release_json, sha
 from motiondiff.safe_pickle import RefusedPickle, load_pickle
 
 MODELS = REPO_DIR / "checkpoints" / "models"
-SHIPPED = ["bandai_mini_text_cpu", "bandai_text_cpu", "bandai_action_cpu"]
+SHIPPED = ["bandai_mini_text_cpu", "bandai_text_cpu", "bandai_text_long_12k", "bandai_action_cpu"]
 
 
 @pytest.mark.parametrize("name", SHIPPED)

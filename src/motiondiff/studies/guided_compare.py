@@ -30,7 +30,7 @@ from motiondiff.bench.timing import median_seconds as timed_median
 from motiondiff.errors import UsageError
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
 from motiondiff.lit.conditions import text_encoder_kwargs
-from motiondiff.paths import REPO_DIR
+from motiondiff.paths import REPO_DIR, shown
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "comparison"
 # Tab. 4's rows: (level the hierarchy stops at and decodes, local-action energy guidance on)
@@ -257,9 +257,7 @@ def main(argv: list[str] | None = None) -> int:
         training[f"GuidedMotion {level} VAE"] = (training_seconds(Path(path)) or {}).get("train_seconds", "unknown")
     training["MDM"] = (mdm_run or {}).get("train_seconds", "unknown")
     meta = {**settings, "latent": str(latent_path), "mdm": str(mdm_path), "local_model": str(local_path),
-            "data": str(data.relative_to(REPO_DIR) if data.is_relative_to(REPO_DIR) else data),
-            "evaluators": str(evaluator_dir.relative_to(REPO_DIR) if evaluator_dir.is_relative_to(REPO_DIR)
-                              else evaluator_dir),
+            "data": shown(data), "evaluators": shown(evaluator_dir),
             "clips": len(clips), "mdm_row": MDM_ROW.format(steps=settings["mdm_steps"]), "training": training,
             "level_steps_text": "/".join(str(v) for v in settings["level_steps"].values()),
             "command": "python -m motiondiff.studies.guided_compare " + " ".join(argv)}  # fmt: skip

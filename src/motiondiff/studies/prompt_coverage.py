@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.atomic import write_json
-from motiondiff.paths import REPO_DIR
+from motiondiff.paths import REPO_DIR, shown
 
 OUT_OF_DOMAIN = REPO_DIR / "data" / "coverage" / "out_of_domain.json"
 HELD_OUT = {"bandai_human": REPO_DIR / "data" / "paraphrases" / "bandai_human.json",
@@ -87,8 +87,8 @@ def main(argv: list[str]) -> None:
     out.mkdir(parents=True, exist_ok=True)
     lines = [f"# Prompt coverage of `{release.name}`", "",
              f"Bank: {len(bank.features)} distinct training captions ({cfg.per_action} at most per action, seed "
-             f"{cfg.seed}, mirrored captions {'included' if mirror else 'not included'}) from {data_root}; "
-             f"written to `{saved.relative_to(REPO_DIR) if saved.is_relative_to(REPO_DIR) else saved}`.", "",
+             f"{cfg.seed}, mirrored captions {'included' if mirror else 'not included'}) from {shown(data_root)}; "
+             f"written to `{shown(saved)}`.", "",
              "Chosen by the rule of [rules.md](../rules.md):", "",
              "| side | texts | warned (below the threshold) | median best similarity |", "|---|---:|---:|---:|",
              f"| val captions (in-domain, generated) | {len(val)} | {np.mean(val_best < threshold):.3f} | "

@@ -28,7 +28,7 @@ from motiondiff.eval import report
 from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_metrics
 from motiondiff.lit.vae import MotionVAEModule, mpjpe
 from motiondiff.models.vae import LEVEL_TOKENS
-from motiondiff.paths import REPO_DIR
+from motiondiff.paths import REPO_DIR, shown
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "vae_levels"
 # column key, header (metric keys come from lit.vae.mpjpe and protocol.replication_metrics)
@@ -55,7 +55,7 @@ def load_vae(path: Path) -> tuple[MotionVAEModule, dict]:
     module.load_state_dict(ckpt["state_dict"])
     run_json = path.parent.parent / "run.json"
     run = json.loads(run_json.read_text()) if run_json.is_file() else {}
-    info = {"checkpoint": _relative(path), "tokens": module.tokens, "step": int(ckpt["global_step"]),
+    info = {"checkpoint": shown(path), "tokens": module.tokens, "step": int(ckpt["global_step"]),
             "run_steps": run.get("train_steps"), "train_seconds": run.get("train_seconds"),
             "overrides": run.get("overrides"), "parameters": sum(p.numel() for p in module.vae.parameters())}  # fmt: skip
     return module.eval(), info
@@ -79,12 +79,6 @@ def datamodule(module: MotionVAEModule, data_root: str | None):
     dm = instantiate(cfg.dataset.datamodule, max_frames=hp.max_frames, **({"representation": rep} if rep else {}))
     dm.setup(None)
     return dm
-
-
-def _relative(path: str | Path) -> str:
-    """Repo-relative where possible: the committed report should not name this machine's folders."""
-    path = Path(path).resolve()
-    return str(path.relative_to(REPO_DIR)) if path.is_relative_to(REPO_DIR) else str(path)
 
 
 @torch.inference_mode()
@@ -218,7 +212,7 @@ def main(argv: list[str]) -> Path:
         if (m.hparams.dataset, m.hparams.feature_dim) != (first.dataset, first.feature_dim):
             raise UsageError(f"the {lv} VAE was trained on {m.hparams.dataset!r}, the motion VAE on {first.dataset!r}")
     dm = datamodule(modules["motion"], cfg.data)
-    folder = _relative(cfg.evaluator_dir or REPO_DIR / "checkpoints" / "evaluators" / first.dataset)
+    folder = shown(cfg.evaluator_dir or REPO_DIR / "checkpoints" / "evaluators" / first.dataset)
     try:
         evaluators = Evaluators.load(REPO_DIR / folder, num_joints=first.num_joints).for_module(modules["motion"])
     except FileNotFoundError as err:

@@ -8,12 +8,13 @@ import pytest
 
 from motiondiff.demo.models import DemoModels, generate, parse_weights, released_choices
 from motiondiff.errors import UsageError
+from motiondiff.paths import SHIPPED_MODELS
 
 
 def test_released_models_are_offered_and_guidedmotion_only_with_a_checkpoint(tmp_path):
     keys = [c.key for c in released_choices()]
     assert keys[:2] == ["text", "action"] and "bandai_mini_text_cpu" in keys  # other releases, not the aliased stems
-    assert "bandai_text_cpu" not in keys and "bandai_action_cpu" not in keys
+    assert not {path.stem for path in SHIPPED_MODELS.values()} & set(keys)
     assert "guided" not in [c.key for c in DemoModels().choices]
     with pytest.raises(UsageError, match="no GuidedMotion checkpoint"):
         DemoModels(guided=tmp_path / "missing.ckpt")
