@@ -21,7 +21,7 @@ from hydra.utils import instantiate
 
 from motiondiff.bench import workloads
 from motiondiff.cli.common import REPO_DIR, register_resolvers
-from motiondiff.hardware import cpu_has_fast_bf16, cpu_model
+from motiondiff.runtime.hardware import cpu_has_fast_bf16, cpu_model
 
 
 def real_frames_per_second(overrides: list[str], bucketing: bool, steps: int, batch_size: int, bf16: bool) -> dict:

@@ -21,7 +21,7 @@ from pathlib import Path
 import torch
 
 from motiondiff.bench import workloads as W
-from motiondiff.hardware import cpu_has_fast_bf16, cpu_model
+from motiondiff.runtime.hardware import cpu_has_fast_bf16, cpu_model
 
 BATCH, FRAMES = 64, 120
 SPLIT_MOTIONS = 277 * 2 * 20  # the test split, label and random captions, 20 replications
@@ -65,10 +65,10 @@ def train_rows(repeats: int) -> list[tuple[str, float, float, float]]:
 def sampling_rows(rounds: int) -> tuple[dict[str, list[float]], str]:
     """Seconds per 128 guided motions of 120 frames with the shipped text model, per sampler, alternated; and the
     precision evaluate.py would sample in."""
-    from motiondiff.hardware import inference_precision
     from motiondiff.lit.generation import feed_forward_shape, generate_features
-    from motiondiff.lit.loading import load_model
-    from motiondiff.paths import SHIPPED_MODELS
+    from motiondiff.model_files.loading import load_model
+    from motiondiff.model_files.resolve import SHIPPED_MODELS
+    from motiondiff.runtime.hardware import inference_precision
 
     module = load_model(SHIPPED_MODELS["text"])
     prompts = [f"a person walks forward {i}" for i in range(128)]

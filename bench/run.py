@@ -16,10 +16,10 @@ import json
 import sys
 from pathlib import Path
 
-from motiondiff.atomic import atomic_write
 from motiondiff.bench.report import markdown
 from motiondiff.bench.suite import run_suite
-from motiondiff.errors import UsageError
+from motiondiff.runtime.atomic import atomic_write
+from motiondiff.runtime.errors import UsageError
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "latest"
 

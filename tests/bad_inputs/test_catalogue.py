@@ -24,8 +24,8 @@ from cli_helpers import write_kit_layout  # noqa: E402
 
 from motiondiff.cli.common import UsageError  # noqa: E402
 from motiondiff.data.formats.bvh import BVHError, parse_bvh, read_bvh  # noqa: E402
-from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError  # noqa: E402
 from motiondiff.data.sources.humanml3d import load_official_split  # noqa: E402
+from motiondiff.runtime.errors import DatasetNotFoundError, RepresentationError  # noqa: E402
 
 BVH = """HIERARCHY
 ROOT Hips

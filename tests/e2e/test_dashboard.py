@@ -139,7 +139,7 @@ def test_tensorboard_draws_the_loss_chart_and_plays_the_gifs(browser, run, tmp_p
 
 def test_action_model_videos_show_its_first_actions(action_ckpt, tmp_path):
     from motiondiff.eval.sample_videos import SampleVideos, slug
-    from motiondiff.lit.loading import load_model
+    from motiondiff.model_files.loading import load_model
 
     module = load_model(action_ckpt)
     videos = SampleVideos(seconds=1.0).render(module, tmp_path, guidance=module.default_guidance)

@@ -17,7 +17,7 @@ from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations.hml_features import joints_from_features
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 register_resolvers()
 CLIP_ID = "dataset-1_walk_active_001"

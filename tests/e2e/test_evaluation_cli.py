@@ -90,7 +90,7 @@ def test_unconstrained_jp_model_with_smoothing_reports_its_own_feature_smoothnes
     from hydra import compose, initialize_config_dir
 
     from motiondiff.cli.evaluate import report_evaluation
-    from motiondiff.paths import CONF_DIR
+    from motiondiff.runtime.paths import CONF_DIR
 
     dm = tiny_datamodule(representation="jp")
     module = tiny_module(dm, ("condition=none", "representation=jp"))

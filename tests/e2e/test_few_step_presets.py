@@ -47,8 +47,8 @@ def test_t10_preset_trains_evaluates_and_samples(tmp_path):
     from omegaconf import OmegaConf
 
     from motiondiff.cli.common import sampling_steps
-    from motiondiff.errors import UsageError
-    from motiondiff.lit.loading import load_model
+    from motiondiff.model_files.loading import load_model
+    from motiondiff.runtime.errors import UsageError
 
     with pytest.raises(UsageError, match="between 1 and the model's 10 diffusion steps"):  # what sample.py checks
         sampling_steps(OmegaConf.create({"steps": 50, "sampler": {"steps": 50}}), load_model(ckpt))

@@ -63,8 +63,8 @@ def test_sample_guidedmotion_with_generated_local_actions_and_weights(latent_ckp
 
 def test_bad_local_action_input_is_one_clear_error(latent_ckpt):
     """Through sample.py: exit code 2 and one line; the other checks through the same code in-process."""
-    from motiondiff.errors import UsageError
     from motiondiff.pipelines import GuidedMotionPipeline
+    from motiondiff.runtime.errors import UsageError
 
     work, ckpt = latent_ckpt
     proc = run_cli("sample.py", "method=guidedmotion", f"checkpoint={ckpt}", f"text='{CAPTION}'", "length=2",
@@ -135,8 +135,8 @@ def test_weight_control_report_measures_latent_and_decoded_distances(latent_ckpt
 
 def test_guided_pipeline_from_python(latent_ckpt):
     """The same sampling through GuidedMotionPipeline, the Python API."""
-    from motiondiff.errors import UsageError
     from motiondiff.pipelines import GuidedMotionPipeline
+    from motiondiff.runtime.errors import UsageError
 
     _, ckpt = latent_ckpt
     pipe = GuidedMotionPipeline.from_pretrained(ckpt, local_model="text")
@@ -152,7 +152,7 @@ def test_guided_pipeline_from_python(latent_ckpt):
 def test_web_demo_offers_guidedmotion_with_a_weight_per_local_action(latent_ckpt, tmp_path):
     """`motiondiff-demo guided=<ckpt>`: the model list gains GuidedMotion, whose weights box reaches the sampler."""
     from motiondiff.demo.models import DemoModels, generate
-    from motiondiff.errors import UsageError
+    from motiondiff.runtime.errors import UsageError
 
     _, ckpt = latent_ckpt
     models = DemoModels(guided=ckpt)
@@ -168,9 +168,9 @@ def test_web_demo_offers_guidedmotion_with_a_weight_per_local_action(latent_ckpt
 def test_a_latent_model_releases_as_safetensors_and_samples_like_its_checkpoint(latent_ckpt):
     """release_checkpoint writes the latent model and its three VAEs as one release; it loads to the same weights,
     sample.py takes it, a motion-model loader refuses it in one line, and a damaged VAE entry is named."""
-    from motiondiff.errors import UsageError
-    from motiondiff.lit.loading import load_latent_model
-    from motiondiff.release import load_release, release_checkpoint
+    from motiondiff.model_files.loading import load_latent_model
+    from motiondiff.model_files.release import load_release, release_checkpoint
+    from motiondiff.runtime.errors import UsageError
 
     work, ckpt = latent_ckpt
     weights, config = release_checkpoint(ckpt, work / "release" / "guided")

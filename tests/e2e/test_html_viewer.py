@@ -14,7 +14,7 @@ from browser_helpers import pixels_near, screenshot
 from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.export import export_html
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 LEFT_BLUE, RIGHT_RED = (0x1F, 0x77, 0xB4), (0xD6, 0x27, 0x28)  # the viewer's limb colours
 

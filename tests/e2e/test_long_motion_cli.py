@@ -74,10 +74,10 @@ def test_timed_prompt_errors_are_one_clear_line(text_ckpt, tmp_path, overrides, 
 
     from motiondiff.cli.prompt_inputs import split_timed
     from motiondiff.cli.sample import collect_prompts, long_motion_settings
-    from motiondiff.errors import UsageError
-    from motiondiff.lit.loading import load_model
-    from motiondiff.paths import CONF_DIR
-    from motiondiff.scripting import register_resolvers
+    from motiondiff.model_files.loading import load_model
+    from motiondiff.runtime.errors import UsageError
+    from motiondiff.runtime.paths import CONF_DIR
+    from motiondiff.runtime.scripting import register_resolvers
 
     register_resolvers()
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):

@@ -18,8 +18,8 @@ from motiondiff.data.formats.bvh import read_bvh, write_bvh
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.formats.up_axis import UpAxisWarning, rotation_to_y_up
 from motiondiff.export import export_bvh
-from motiondiff.rotations import matrix_to_quat, qmul
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.rotations import matrix_to_quat, qmul
+from motiondiff.geometry.skeleton import SMPL22
 
 CLIP_ID = "dataset-1_walk_active_001"
 EDIT = ["checkpoint=shipped", "kind=inbetween", "text=a person walks forward", "steps=10", "num_samples=1", "seed=0"]

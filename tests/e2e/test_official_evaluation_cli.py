@@ -64,8 +64,8 @@ def test_official_without_a_folder_names_the_layout(text_ckpt):
     from omegaconf import OmegaConf
 
     from motiondiff.cli.evaluate import load_evaluators
-    from motiondiff.errors import UsageError
-    from motiondiff.lit.loading import load_model
+    from motiondiff.model_files.loading import load_model
+    from motiondiff.runtime.errors import UsageError
 
     cfg = OmegaConf.create({"evaluator": "official", "official_dir": None, "dataset": {"name": "bandai_mini"}})
     with pytest.raises(UsageError, match="official_dir=<folder>") as err:

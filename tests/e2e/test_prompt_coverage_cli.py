@@ -9,7 +9,7 @@ import warnings
 import pytest
 from cli_helpers import run_cli
 
-from motiondiff.paths import SHIPPED_MODELS
+from motiondiff.model_files.resolve import SHIPPED_MODELS
 from motiondiff.text.coverage import coverage_path
 
 FAST = ["checkpoint=shipped", "num_samples=1", "length=1", "sampler=ddim", "steps=2", "export=none"]

@@ -11,7 +11,7 @@ import numpy as np
 from fixtures.in_process import run_entry
 
 from motiondiff.export import smpl_joints
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 COMMON = ["checkpoint=shipped", "num_samples=1", "cleanup=feet"]
 

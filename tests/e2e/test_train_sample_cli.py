@@ -15,7 +15,7 @@ import torch
 from cli_helpers import REPO, TINY, run_cli
 from fixtures.in_process import run_entry, user_error
 
-from motiondiff.paths import SHIPPED_MODELS
+from motiondiff.model_files.resolve import SHIPPED_MODELS
 
 
 def test_train_writes_checkpoint_and_logs(text_ckpt):

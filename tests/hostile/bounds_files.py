@@ -17,7 +17,7 @@ from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.bvh import DEFAULT_JOINT_CHANNELS, DEFAULT_ROOT_CHANNELS, format_bvh, motion_from_arrays
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.formats.up_axis import rotation_to_y_up
-from motiondiff.kinematics import forward_kinematics
+from motiondiff.geometry.kinematics import forward_kinematics
 
 CLIP_ID = "dataset-1_walk_active_001"
 _LOCK = threading.Lock()

@@ -16,7 +16,7 @@ import torch
 from hostile_cli import REPO, Hostile, assert_refused, files_under
 from safetensors.torch import load_file, save_file
 
-from motiondiff.release_checks import sha256_of
+from motiondiff.model_files.release_checks import sha256_of
 
 SHIPPED = REPO / "checkpoints" / "models" / "bandai_mini_text_cpu"
 SMALL = ("text=walk", "num_samples=1", "export=none", "length=1")

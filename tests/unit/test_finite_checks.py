@@ -12,12 +12,12 @@ import pytest
 import torch
 from hydra import compose, initialize_config_dir
 
-from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.cli.validate import RULES_EDIT, RULES_SAMPLE, check
-from motiondiff.errors import UsageError
 from motiondiff.lit.generation import NonFiniteOutput, check_finite_output, generate_features
-from motiondiff.paths import CONF_DIR
-from motiondiff.scripting import register_resolvers
+from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import CONF_DIR
+from motiondiff.runtime.scripting import register_resolvers
 
 register_resolvers()
 

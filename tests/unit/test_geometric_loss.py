@@ -8,7 +8,7 @@ import torch
 
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
 from motiondiff.data.representations import REPRESENTATIONS
-from motiondiff.losses import GeometricLoss
+from motiondiff.lit.geometric_losses import GeometricLoss
 
 REPS = [r for r in REPRESENTATIONS if r != "kit251"]
 
@@ -64,7 +64,7 @@ def test_equations_by_hand():
       L_vel  = (‖(0.3, 0.4) and the left foot still‖² + ‖−(0.3, 0.4) and +0.2‖²) / 2 = (0.25 + 0.29) / 2
       L_foot = (0 + 0.2²) / 2 (only the moved foot slides)"""
     from motiondiff.data.representations import get_representation
-    from motiondiff.skeleton import SMPL22
+    from motiondiff.geometry.skeleton import SMPL22
 
     rep = get_representation("jp", SMPL22)
     x0 = torch.zeros(1, 3, 66, dtype=torch.float64)
@@ -118,7 +118,7 @@ def test_mdm_contact_rule_by_hand():
     """contact_threshold=0.01: a foot joint is in contact at frame i where its true position moves at most 1 cm to
     frame i+1 (MDM's a2m rule), whatever the representation's own rule says."""
     from motiondiff.data.representations import get_representation
-    from motiondiff.skeleton import SMPL22
+    from motiondiff.geometry.skeleton import SMPL22
 
     rep = get_representation("jp", SMPL22)
     n, j = 4, rep.skeleton.num_joints

@@ -7,7 +7,7 @@ import pytest
 from hydra import compose, initialize_config_dir
 
 from motiondiff.cli.common import REPO_DIR, register_resolvers
-from motiondiff.hardware import cpu_has_fast_bf16, fast_cpu_precision
+from motiondiff.runtime.hardware import cpu_has_fast_bf16, fast_cpu_precision
 
 
 def test_cpu_presets_follow_the_cpu():
@@ -29,8 +29,8 @@ def test_cpu_presets_follow_the_cpu():
 def test_device_auto_is_the_gpu_where_there_is_one(monkeypatch):
     import torch
 
-    from motiondiff.errors import UsageError
-    from motiondiff.hardware import resolve_device
+    from motiondiff.runtime.errors import UsageError
+    from motiondiff.runtime.hardware import resolve_device
 
     monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
     assert resolve_device("auto") == "cpu" and resolve_device(" CPU ") == "cpu"
@@ -41,8 +41,8 @@ def test_device_auto_is_the_gpu_where_there_is_one(monkeypatch):
 
 
 def test_sampling_precision_auto_follows_what_measured_faster(monkeypatch):
-    from motiondiff import hardware
-    from motiondiff.errors import UsageError
+    from motiondiff.runtime import hardware
+    from motiondiff.runtime.errors import UsageError
 
     assert hardware.inference_precision("32") == "32-true" and hardware.inference_precision("FP32") == "32-true"
     assert hardware.inference_precision("bf16") == "bf16-mixed" == hardware.inference_precision("bf16-mixed")

@@ -1,4 +1,4 @@
-"""Inverse kinematics (motiondiff.inverse_kinematics) and its rotation helpers: exact round trips on synthetic
+"""Inverse kinematics (motiondiff.geometry.inverse_kinematics) and its rotation helpers: exact round trips on synthetic
 motions of several skeletons and on the embedded dataset's real clips, rest offsets fitted from positions, twist
 continuity through the swing singularity, quaternion sign continuity, the fit of joints whose bones stretch and bad
 input."""
@@ -11,10 +11,10 @@ from scipy.spatial.transform import Rotation
 
 from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.prepared import load_split
-from motiondiff.inverse_kinematics import fit_rest_offsets, refine_rotations, solve_rotations
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.rotations import kabsch, qangle, qfix, qrot, qswing, qtwist_angle, quat_to_matrix
-from motiondiff.skeleton import KIT21, SMPL22, SMPL24, Skeleton
+from motiondiff.geometry.inverse_kinematics import fit_rest_offsets, refine_rotations, solve_rotations
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.rotations import kabsch, qangle, qfix, qrot, qswing, qtwist_angle, quat_to_matrix
+from motiondiff.geometry.skeleton import KIT21, SMPL22, SMPL24, Skeleton
 
 
 def random_quats(shape, seed) -> np.ndarray:

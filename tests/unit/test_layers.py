@@ -1,17 +1,19 @@
-"""The package's dependency direction (see docs/architecture.md): nothing outside `motiondiff.cli` imports it, the
-library never imports the user-facing pipelines from below them, and no two modules import each other, directly or
-around a loop. Imports are read from the source (every `import`, also inside functions), so a test import cannot
-hide one."""
+"""The package's dependency direction (see docs/architecture.md): every module stands on a floor of the table in
+docs/architecture.md and imports only from its floor or below; nothing outside `motiondiff.cli` imports it, the
+studies and the demo do not import each other, and no two modules import each other, directly or around a loop.
+Imports are read from the source (every `import`, also inside functions), so a test import cannot hide one."""
 
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 PACKAGE = SRC / "motiondiff"
+ARCHITECTURE = SRC.parent / "docs" / "architecture.md"
 
 # the top layers and who may import them: the CLI only itself; the web demo the CLI and itself; the research studies
 # the CLI and themselves; the pipelines the CLI, the studies, the demo and themselves
@@ -102,6 +104,50 @@ def _cycles(edges) -> list[list[str]]:
     return out
 
 
+def floors() -> dict[str, int]:
+    """The ladder of docs/architecture.md: each package named in a `| floor | packages | ... |` row -> its floor."""
+    table = {}
+    for line in ARCHITECTURE.read_text(encoding="utf-8").splitlines():
+        row = re.match(r"\|\s*(\d+)\s*\|([^|]*)\|", line)
+        if row:
+            table.update({name: int(row.group(1)) for name in re.findall(r"`(motiondiff[\w.]*)`", row.group(2))})
+    return table
+
+
+def floor_of(module: str, table: dict[str, int]) -> int | None:
+    owners = [p for p in table if module == p or module.startswith(p + ".")]
+    return table[max(owners, key=len)] if owners else None
+
+
+def _floor_violations(edges, table) -> list[str]:
+    return sorted(f"{src} (floor {floor_of(src, table)}) imports {dst} (floor {floor_of(dst, table)})"
+                  for src, targets in edges.items() for dst in targets
+                  if None not in (floor_of(src, table), floor_of(dst, table))
+                  and floor_of(dst, table) < floor_of(src, table))  # fmt: skip
+
+
+def test_the_architecture_table_places_every_module():
+    table = floors()
+    assert sorted(set(table.values())) == list(range(1, 10)), table
+    unplaced = [m for m in graph() if m != "motiondiff" and floor_of(m, table) is None]
+    assert not unplaced, "modules that docs/architecture.md does not place on a floor:\n" + "\n".join(unplaced)
+
+
+def test_every_import_points_down_the_ladder():
+    bad = _floor_violations(graph(), floors())
+    assert not bad, "imports that point up the floors of docs/architecture.md:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("floor", range(2, 10))
+def test_a_planted_upward_import_at_each_floor_fails(floor):
+    table, edges = floors(), {k: set(v) for k, v in graph().items()}
+    src = sorted(m for m in edges if floor_of(m, table) == floor)[0]
+    dst = sorted(m for m in edges if floor_of(m, table) == floor - 1)[0]
+    assert not _floor_violations(edges, table)
+    edges[src].add(dst)
+    assert _floor_violations(edges, table) == [f"{src} (floor {floor}) imports {dst} (floor {floor - 1})"]
+
+
 def test_nothing_below_imports_the_cli_the_studies_or_the_pipelines():
     bad = _layer_violations(graph())
     assert not bad, "imports that point up the layers:\n" + "\n".join(bad)
@@ -115,15 +161,15 @@ def test_no_import_cycles():
 @pytest.mark.parametrize(
     "extra, expect",
     [
-        ({"motiondiff.eval.metrics": {"motiondiff.cli.common"}}, "layers"),
+        ({"motiondiff.metrics": {"motiondiff.cli.common"}}, "layers"),
         ({"motiondiff.pipelines.motion": {"motiondiff.studies.behaviour"}}, "layers"),
         ({"motiondiff.lit.generation": {"motiondiff.pipelines.motion"}}, "layers"),
         ({"motiondiff.pipelines.output": {"motiondiff.demo.models"}}, "layers"),
         ({"motiondiff.studies.behaviour": {"motiondiff.demo.app"}}, "layers"),
         (
             {
-                "motiondiff.data.representations.clip": {"motiondiff.eval.metrics"},
-                "motiondiff.eval.metrics": {"motiondiff.data.representations.clip"},
+                "motiondiff.data.representations.clip": {"motiondiff.metrics"},
+                "motiondiff.metrics": {"motiondiff.data.representations.clip"},
             },
             "cycle",
         ),

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from motiondiff.paths import SHIPPED_MODELS
+from motiondiff.model_files.resolve import SHIPPED_MODELS
 
 REPO = Path(__file__).resolve().parents[2]
 

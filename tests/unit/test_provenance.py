@@ -8,7 +8,7 @@ import re
 import pytest
 from omegaconf import OmegaConf
 
-from motiondiff.provenance import REPO_DIR, git_state, package_versions, provenance, update_run_json
+from motiondiff.runtime.provenance import REPO_DIR, git_state, package_versions, provenance, update_run_json
 
 
 @pytest.mark.skipif(not (REPO_DIR / ".git").exists(), reason="not a git checkout (a source archive has no commit)")

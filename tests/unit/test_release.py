@@ -12,9 +12,9 @@ from hydra import compose, initialize_config_dir
 from motiondiff.cli.common import REPO_DIR, register_resolvers
 from motiondiff.cli.train import build_module
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
-from motiondiff.errors import UsageError
-from motiondiff.release import load_release, save_release
-from motiondiff.release_checks import sha256_of
+from motiondiff.model_files.release import load_release, save_release
+from motiondiff.model_files.release_checks import sha256_of
+from motiondiff.runtime.errors import UsageError
 
 register_resolvers()
 

@@ -13,12 +13,12 @@ import pytest
 import torch
 from safetensors.torch import load_file, save_file
 
-from motiondiff.checked_loading import torch_load
-from motiondiff.errors import UsageError
-from motiondiff.paths import REPO_DIR
-from motiondiff.release import load_release
-from motiondiff.release_checks import check_release_meta, read_release_json, sha256_of
-from motiondiff.safe_pickle import RefusedPickle, load_pickle
+from motiondiff.model_files.release import load_release
+from motiondiff.model_files.release_checks import check_release_meta, read_release_json, sha256_of
+from motiondiff.runtime.checked_loading import torch_load
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import REPO_DIR
+from motiondiff.runtime.safe_pickle import RefusedPickle, load_pickle
 
 MODELS = REPO_DIR / "checkpoints" / "models"
 SHIPPED = ["bandai_mini_text_cpu", "bandai_text_cpu", "bandai_text_long_12k", "bandai_action_cpu"]

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from motiondiff.boundary import LOCK_NAME, remove_stale_runs, run_folder
-from motiondiff.errors import UsageError
+from motiondiff.runtime.boundary import LOCK_NAME, remove_stale_runs, run_folder
+from motiondiff.runtime.errors import UsageError
 
 
 def dead_pid() -> int:

@@ -35,7 +35,7 @@ def crafted(tmp_path) -> tuple[Path, Path]:
 def _refused(load, path: Path, marker: Path, one_line: bool = True) -> None:
     """Refused without running code; through the project's loaders as one UsageError naming the file (never torch's
     advice to pass weights_only=False), through torch directly as its own UnpicklingError."""
-    from motiondiff.errors import UsageError
+    from motiondiff.runtime.errors import UsageError
 
     with pytest.raises(UsageError if one_line else pickle.UnpicklingError) as err:
         load(path)
@@ -52,7 +52,7 @@ def test_a_plain_unpickler_would_run_the_payload(crafted):
 
 
 def test_sampling_loader_refuses_a_crafted_checkpoint(crafted):
-    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.model_files.loading import load_model as load_module
 
     _refused(load_module, *crafted)
 
@@ -78,7 +78,7 @@ def test_vae_and_latent_loaders_refuse_a_crafted_checkpoint(crafted):
 
 
 def test_official_evaluator_loader_refuses_a_crafted_checkpoint(crafted):
-    from motiondiff.models.evaluators.networks import load_official_action_classifier
+    from motiondiff.model_files.evaluators import load_official_action_classifier
 
     _refused(load_official_action_classifier, *crafted)
 
@@ -86,7 +86,7 @@ def test_official_evaluator_loader_refuses_a_crafted_checkpoint(crafted):
 def test_a_pickle_named_safetensors_is_not_unpickled(crafted, tmp_path):
     from safetensors import SafetensorError
 
-    from motiondiff.release import load_release
+    from motiondiff.model_files.release import load_release
 
     path, marker = crafted
     fake = tmp_path / "model.safetensors"

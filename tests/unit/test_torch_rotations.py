@@ -8,9 +8,9 @@ import pytest
 import torch
 from scipy.spatial.transform import Rotation
 
-from motiondiff import rotations as R
-from motiondiff import torch_rotations as T
-from motiondiff.kinematics import forward_kinematics, forward_kinematics_torch
+from motiondiff.geometry import rotations as R
+from motiondiff.geometry import torch_rotations as T
+from motiondiff.geometry.kinematics import forward_kinematics, forward_kinematics_torch
 
 TOL = 1e-6
 

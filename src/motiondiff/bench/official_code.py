@@ -27,7 +27,7 @@ from types import ModuleType
 
 import torch
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 REPO_URL = "https://github.com/GuyTevet/motion-diffusion-model"
 EXPECTED_FILES = ("model/mdm.py", "diffusion/gaussian_diffusion.py", "diffusion/respace.py", "utils/model_util.py")

@@ -9,7 +9,7 @@ import platform
 import torch
 
 from motiondiff.bench.timing import format_seconds
-from motiondiff.hardware import cpu_flags, cpu_has_fast_bf16, cpu_model
+from motiondiff.runtime.hardware import cpu_flags, cpu_has_fast_bf16, cpu_model
 
 
 def allocator() -> str:

@@ -36,7 +36,7 @@ def default_sampler() -> tuple[str, int | None]:
     """sample.py's default sampler and steps (conf/sample.yaml's defaults)."""
     from hydra import compose, initialize_config_dir
 
-    from motiondiff.paths import REPO_DIR
+    from motiondiff.runtime.paths import REPO_DIR
 
     with initialize_config_dir(str(REPO_DIR / "conf"), version_base="1.3"):
         cfg = compose("sample")
@@ -88,8 +88,9 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "", co
     before anything is timed, so a bad path fails at once)."""
     from motiondiff.bench.official_code import load_official
     from motiondiff.lit.conditions import text_encoder_kwargs
-    from motiondiff.lit.loading import load_model as load_module
-    from motiondiff.paths import REPO_DIR, find_checkpoint
+    from motiondiff.model_files.loading import load_model as load_module
+    from motiondiff.model_files.resolve import find_model
+    from motiondiff.runtime.paths import REPO_DIR
 
     start = time.perf_counter()
     code = load_official(official) if official else None
@@ -142,7 +143,7 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "", co
         compile_rows(s, quick)
 
     # Sampling from text with the real model.
-    module = load_module(find_checkpoint(model, REPO_DIR / "outputs"))
+    module = load_module(find_model(model, REPO_DIR / "outputs"))
     guidance = module.default_guidance
     name, steps = default_sampler()
     name = module.resolve_sampler(name)  # sampler=auto: the model's own

@@ -1,5 +1,5 @@
 """Shared CLI plumbing: the trainer's loggers and callbacks, the sampling settings every command checks the same way.
-The helpers every entry point needs live below the CLI (motiondiff.scripting, .paths, .errors) and are re-exported."""
+The helpers every entry point needs live below the CLI (motiondiff.runtime.scripting, .paths, .errors) and are re-exported."""
 
 from __future__ import annotations
 
@@ -7,11 +7,12 @@ import logging
 
 from omegaconf import DictConfig
 
-from motiondiff.errors import UsageError  # noqa: F401  (re-exported: the CLI's error type)
 from motiondiff.lit.conditions import text_encoder_kwargs  # noqa: F401
 from motiondiff.lit.generation import fitted_steps
-from motiondiff.paths import RELEASE_SUFFIXES, REPO_DIR, SHIPPED_MODEL, SHIPPED_MODELS, find_checkpoint  # noqa: F401
-from motiondiff.scripting import (  # noqa: F401
+from motiondiff.model_files.resolve import find_model  # noqa: F401  (the commands take it from here)
+from motiondiff.runtime.errors import UsageError  # noqa: F401  (re-exported: the CLI's error type)
+from motiondiff.runtime.paths import REPO_DIR
+from motiondiff.runtime.scripting import (  # noqa: F401
     key_value_args,
     quiet_tool_caches,
     register_resolvers,
@@ -40,7 +41,7 @@ def _instantiate(cfg):
     from hydra.errors import InstantiationException
     from hydra.utils import instantiate
 
-    from motiondiff.scripting import USER_ERRORS
+    from motiondiff.runtime.scripting import USER_ERRORS
 
     try:
         return instantiate(cfg)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from motiondiff.scripting import quiet_tool_caches, user_errors
+from motiondiff.runtime.scripting import quiet_tool_caches, user_errors
 
 
 def parser() -> argparse.ArgumentParser:

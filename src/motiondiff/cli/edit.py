@@ -9,8 +9,7 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.atomic import finite_or_null, save_npy, write_json
-from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps
+from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps
 from motiondiff.cli.outputs import cleanup_option, export_formats
 from motiondiff.cli.validate import RULES_EDIT, check
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
@@ -20,11 +19,12 @@ from motiondiff.edit.masks import EditError, frames_from_seconds
 from motiondiff.edit.measures import edit_numbers
 from motiondiff.export.naming import slug
 from motiondiff.export.outputs import check_formats_for, export_features
-from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action
 from motiondiff.lit.generation import check_num_samples, feed_forward_shape, sampling_precision
-from motiondiff.lit.loading import load_model as load_module
-from motiondiff.prompt_text import check_text
+from motiondiff.model_files.loading import load_model as load_module
+from motiondiff.runtime.atomic import finite_or_null, save_npy, write_json
+from motiondiff.runtime.hardware import inference_precision, resolve_device
+from motiondiff.runtime.prompt_text import check_text
 
 KINDS = ("inbetween", "parts")
 
@@ -87,7 +87,7 @@ def run(cfg: DictConfig) -> Path:
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
     formats, cleanup = export_formats(cfg), cleanup_option(cfg)
     check_for_edit(cleanup)
-    ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
+    ckpt = find_model(cfg.checkpoint, cfg.paths.output_dir)
     try:
         bvh = read_bvh_input(cfg.input) if cfg.input is not None else None  # a bad file is refused before the model
     except EditError as err:

@@ -6,7 +6,7 @@ line and exit code 2."""
 from __future__ import annotations
 
 from motiondiff.cli import validate
-from motiondiff.scripting import run_hydra as _run
+from motiondiff.runtime.scripting import run_hydra as _run
 
 # The rule tables, the prompts and the model file are checked before a command imports Lightning and the text
 # encoder (about 7 s of CPU on a 2-core machine), so a mistyped number, an empty prompt or a corrupt model is refused
@@ -15,14 +15,14 @@ from motiondiff.scripting import run_hydra as _run
 
 def _before_model(cfg, condition: str = "text") -> None:
     """The checks of a command that need no model: its device, and its model file (``checkpoint=``)."""
-    from motiondiff.model_file_checks import check_model_file
-    from motiondiff.paths import find_checkpoint
+    from motiondiff.model_files.file_checks import check_model_file
+    from motiondiff.model_files.resolve import find_model
 
     if str(cfg.get("device", "cpu")).strip().lower() not in ("cpu", "auto"):
-        from motiondiff.hardware import resolve_device
+        from motiondiff.runtime.hardware import resolve_device
 
         resolve_device(cfg.device)
-    check_model_file(find_checkpoint(cfg.checkpoint, cfg.paths.output_dir, condition))
+    check_model_file(find_model(cfg.checkpoint, cfg.paths.output_dir, condition))
 
 
 def train() -> None:

@@ -20,12 +20,12 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig
 from tqdm import tqdm
 
-from motiondiff.cli.common import UsageError, apply_clip_x0, find_checkpoint, sampling_steps, to_dict
+from motiondiff import metrics as M
+from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps, to_dict
 from motiondiff.cli.outputs import smoothing_sigma
 from motiondiff.cli.validate import RULES_EVALUATE, check
 from motiondiff.edit.smoothing import SMOOTHABLE
 from motiondiff.eval import action_table, official, report
-from motiondiff.eval import metrics as M
 from motiondiff.eval.protocol import (
     EvalClips,
     Evaluators,
@@ -34,8 +34,8 @@ from motiondiff.eval.protocol import (
     multimodality,
     replication_metrics,
 )
-from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.generation import feed_forward_shape
+from motiondiff.runtime.hardware import inference_precision, resolve_device
 
 log = logging.getLogger(__name__)
 PROTOCOL = {"text": "text", "action": "action", "none": "unconstrained"}
@@ -223,11 +223,11 @@ def _log_wandb(out: Path, cfg: DictConfig, rows: dict, extra: dict) -> None:
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_EVALUATE)  # types and ranges before any work
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
-    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.model_files.loading import load_model as load_module
     from motiondiff.pipelines.coverage import load_prompt_mapping
 
     out = Path(HydraConfig.get().runtime.output_dir)
-    ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
+    ckpt = find_model(cfg.checkpoint, cfg.paths.output_dir)
     module = load_module(ckpt, cfg.device)
     _check(cfg, module)  # before any work: bad settings fail at once
     if module.condition_kind == "text":

@@ -11,16 +11,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.atomic import save_npy
 from motiondiff.data.preparing.captions import measure
 from motiondiff.data.representations.spec import bridge_from_spec
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.edit.measures import mean_joint_speed
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
-from motiondiff.errors import UsageError
 from motiondiff.export.naming import slug
 from motiondiff.export.outputs import export_features, parse_formats
 from motiondiff.export.smpl_mesh import render_body
+from motiondiff.runtime.atomic import save_npy
+from motiondiff.runtime.errors import UsageError
 
 if TYPE_CHECKING:
     from motiondiff.lit.motion_diffusion import MotionDiffusion

@@ -11,9 +11,9 @@ from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.errors import UsageError
-from motiondiff.prompt_text import check_text
-from motiondiff.scripting import literal
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.prompt_text import check_text
+from motiondiff.runtime.scripting import literal
 
 SOURCES = ("text", "prompts", "prompts_file", "action")
 # "<text>:<seconds>", seconds a positive decimal, optionally "4s"; a colon not followed by a number is text

@@ -17,11 +17,10 @@ import torch
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.cli.common import (
     UsageError,
     apply_clip_x0,
-    find_checkpoint,
+    find_model,
     sampling_steps,
     to_dict,
 )
@@ -39,7 +38,6 @@ from motiondiff.edit.long_motion import boundary_report, generate_long
 from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.export.naming import slug, unique_stems
 from motiondiff.export.outputs import check_formats_for
-from motiondiff.hardware import inference_precision, resolve_device
 from motiondiff.lit.conditions import check_action, generation_frames, repeated
 from motiondiff.lit.generation import (
     MAX_LONG_SAMPLES,
@@ -48,10 +46,12 @@ from motiondiff.lit.generation import (
     generate_features,
     sampling_precision,
 )
-from motiondiff.lit.loading import load_model
 from motiondiff.lit.motion_diffusion import MotionDiffusion
+from motiondiff.model_files.loading import load_model
 from motiondiff.pipelines.coverage import far_prompts, load_coverage
-from motiondiff.prompt_text import check_text
+from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.runtime.hardware import inference_precision, resolve_device
+from motiondiff.runtime.prompt_text import check_text
 
 
 def collect_prompts(cfg: DictConfig, module: MotionDiffusion) -> list[str | None]:
@@ -95,7 +95,7 @@ def run(cfg: DictConfig) -> Path:
     if cfg.get("method", "mdm") not in ("mdm", "vvmdm"):  # sample.py runs method=guidedmotion with cli.sample_guided
         raise UsageError(f"unknown method={cfg.method!r}; choose mdm, vvmdm or guidedmotion")
     out = Path(HydraConfig.get().runtime.output_dir)
-    ckpt = find_checkpoint(cfg.checkpoint, cfg.paths.output_dir, "action" if cfg.action is not None else "text")
+    ckpt = find_model(cfg.checkpoint, cfg.paths.output_dir, "action" if cfg.action is not None else "text")
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
     if seconds is not None:  # a long motion's windows chain, sampled in one batch
         check_num_samples(cfg.num_samples, MAX_LONG_SAMPLES)

@@ -13,12 +13,12 @@ import numpy as np
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.atomic import finite_or_null, write_json
-from motiondiff.cli.common import UsageError, find_checkpoint
+from motiondiff.cli.common import UsageError, find_model
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
-from motiondiff.hardware import resolve_device
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.models.hierarchical import LEVELS
+from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.runtime.hardware import resolve_device
 
 
 def _list(value) -> list | None:
@@ -48,10 +48,9 @@ def run(cfg: DictConfig) -> Path:
     from motiondiff.cli.validate import RULES_SAMPLE, check
     from motiondiff.export.outputs import check_formats_for
     from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
-    from motiondiff.lit.loading import load_latent_model, load_model
+    from motiondiff.model_files.loading import load_latent_model, load_model
     from motiondiff.pipelines import GuidedMotionPipeline
-    from motiondiff.pipelines.motion import resolve_model
-    from motiondiff.prompt_text import check_text
+    from motiondiff.runtime.prompt_text import check_text
 
     check(cfg, RULES_SAMPLE)  # types, ranges and finite numbers before any work
     out = Path(HydraConfig.get().runtime.output_dir)
@@ -64,11 +63,7 @@ def run(cfg: DictConfig) -> Path:
     if cfg.checkpoint in ("latest", "best"):
         raise UsageError("method=guidedmotion needs checkpoint=shipped (the released GuidedMotion model) or "
                          "checkpoint=<a train_latent.py .ckpt or a GuidedMotion release>")  # fmt: skip
-    path = (
-        resolve_model("guidedmotion")
-        if cfg.checkpoint == "shipped"
-        else find_checkpoint(cfg.checkpoint, cfg.paths.output_dir)
-    )
+    path = find_model(cfg.checkpoint, cfg.paths.output_dir, "guidedmotion")
     module = load_latent_model(path, cfg.device)
     check_formats_for(formats, module.decoder.representation.skeleton, cfg.get("bvh_names"), body)
     if cfg.num_samples < 1:
@@ -84,7 +79,7 @@ def run(cfg: DictConfig) -> Path:
         check_weights(weights, len(described))
     except LocalActionError as err:
         raise UsageError(str(err)) from None
-    local = load_model(find_checkpoint(cfg.local_model, cfg.paths.output_dir), cfg.device)
+    local = load_model(find_model(cfg.local_model, cfg.paths.output_dir), cfg.device)
     pipe = GuidedMotionPipeline(module, local, str(path))
     result = pipe(text, seconds=frames / fps, num_samples=int(cfg.num_samples), local_actions=_list(cfg.local_actions),
                   local_weights=weights, local_candidates=int(cfg.local_candidates), local_choice=_choice(cfg.local_choice),

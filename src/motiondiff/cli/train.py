@@ -16,7 +16,7 @@ from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
 from motiondiff.lit.diffusion import MotionDiffusionModule
-from motiondiff.provenance import provenance, update_run_json
+from motiondiff.runtime.provenance import provenance, update_run_json
 
 log = logging.getLogger(__name__)
 
@@ -72,8 +72,8 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
     The architecture must match, except for parameters this run adds (``NEW_IN_FINE_TUNE``)."""
     from safetensors.torch import load_file
 
-    from motiondiff.checked_loading import check_finite_state, reading, torch_load
-    from motiondiff.release_checks import release_paths
+    from motiondiff.model_files.release_checks import release_paths
+    from motiondiff.runtime.checked_loading import check_finite_state, reading, torch_load
 
     path = Path(source)
     if path.suffix in (".safetensors", ".json"):
@@ -104,7 +104,7 @@ LIGHTNING_KEYS = ("pytorch-lightning_version", "epoch", "global_step", "optimize
 
 
 def _state_dict(checkpoint: dict, path: Path) -> dict:
-    from motiondiff.checked_loading import CKPT_FIX
+    from motiondiff.runtime.checked_loading import CKPT_FIX
 
     state = checkpoint.get("state_dict")
     if not isinstance(state, dict):
@@ -115,8 +115,8 @@ def _state_dict(checkpoint: dict, path: Path) -> dict:
 def check_resume(ckpt: str, module: MotionDiffusionModule, batch_size: int) -> None:
     """A checkpoint to resume must be readable, finite, of this run's batch size and this architecture: one line
     before training starts, not a traceback from inside Lightning's restore."""
-    from motiondiff.checked_loading import check_finite_state, check_same_shapes, torch_load
     from motiondiff.lit.resume import KEY
+    from motiondiff.runtime.checked_loading import check_finite_state, check_same_shapes, torch_load
 
     path = Path(ckpt)
     checkpoint = torch_load(path, f"ckpt_path={ckpt}: the checkpoint")

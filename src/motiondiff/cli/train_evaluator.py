@@ -19,12 +19,13 @@ import torch
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
+from motiondiff import metrics as M
 from motiondiff.cli.common import REPO_DIR, UsageError
 from motiondiff.data.datamodules import MotionDataModule
-from motiondiff.eval import metrics as M
 from motiondiff.eval.protocol import TEXT_MOTION, EvalClips, Evaluators, time_reversed
 from motiondiff.lit.evaluator import ActionClassifierModule, MovementAutoencoderModule, TextMotionEvaluatorModule
-from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, save_released
+from motiondiff.model_files.evaluators import save_released
+from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator
 from motiondiff.text.word_vectors import Vocabulary, load_glove
 
 log = logging.getLogger(__name__)
@@ -179,6 +180,6 @@ def run(cfg: DictConfig) -> Path:
 
 # python -m motiondiff.cli.train_evaluator dataset=<name> [evaluator_model=paper] [which=[...]]
 if __name__ == "__main__":
-    from motiondiff.scripting import run_hydra
+    from motiondiff.runtime.scripting import run_hydra
 
     run_hydra("train_evaluator", run)

@@ -13,7 +13,6 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from motiondiff.checked_loading import reading
 from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict, trainer_parts
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
@@ -21,7 +20,8 @@ from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.hierarchical import LEVELS
-from motiondiff.provenance import provenance, update_run_json
+from motiondiff.runtime.checked_loading import reading
+from motiondiff.runtime.provenance import provenance, update_run_json
 
 log = logging.getLogger(__name__)
 

@@ -23,7 +23,7 @@ from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.vae import LEVEL_TOKENS
-from motiondiff.provenance import provenance, update_run_json
+from motiondiff.runtime.provenance import provenance, update_run_json
 
 log = logging.getLogger(__name__)
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 
 def _first(*values):
@@ -114,7 +114,7 @@ RULES_EVALUATE = {
 
 def non_finite(value, key: str = ""):
     """(key, value) of the first NaN or infinite float in a plain config tree, None when every number is finite."""
-    from motiondiff.scripting import USER_TEXT_KEYS  # here: scripting is the commands' module, not the rules'
+    from motiondiff.runtime.scripting import USER_TEXT_KEYS  # here: scripting is the commands' module, not the rules'
 
     if isinstance(value, float) and not math.isfinite(value):
         return key, value

@@ -25,7 +25,7 @@ from motiondiff.data.representations import Representation, get_representation
 from motiondiff.data.representations.clip import ClipSplit, LabelledClip
 from motiondiff.data.representations.hml_features import mean_std
 from motiondiff.data.representations.spec import HMLBridge, bridge_from_spec, representation_spec
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 log = logging.getLogger(__name__)
 
@@ -397,7 +397,7 @@ class BVHDataModule(PreparedDataModule):
     def prepared(self, split: str) -> PreparedSplit:
         if not self._prepared:
             from motiondiff.data.preparing.from_bvh import ensure_prepared_bvh
-            from motiondiff.data.sources.errors import DatasetNotFoundError
+            from motiondiff.runtime.errors import DatasetNotFoundError
 
             if not Path(self.src).exists():
                 raise DatasetNotFoundError(
@@ -411,6 +411,6 @@ class BVHDataModule(PreparedDataModule):
 
 def embedded_data_root() -> Path:
     """data/bandai_mini of the source checkout: the small real dataset the project ships."""
-    from motiondiff.paths import REPO_DIR
+    from motiondiff.runtime.paths import REPO_DIR
 
     return REPO_DIR / "data" / "bandai_mini"

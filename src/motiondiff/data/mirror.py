@@ -17,13 +17,13 @@ import numpy as np
 
 from motiondiff.data.datasets import NO_ACTION, MotionRecord
 from motiondiff.data.representations.hml_features import feature_dim, feature_slices, skeleton_for_dim
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
 
 MIRROR_ID_PREFIX = "M"  # HumanML3D names the mirror of 000021 M000021
 _SIDE = re.compile(r"(?<![a-z])(left|right)(?![a-z])", re.IGNORECASE)
 _OTHER_SIDE = {"left": "right", "right": "left"}
 # A rotation matrix R of the original becomes M R M with M = diag(-1, 1, 1): entry (i, j) changes sign by s_i s_j,
-# s = (-1, 1, 1). The 6D layout is (R00, R10, R20, R01, R11, R21) (motiondiff.rotations.matrix_to_6d).
+# s = (-1, 1, 1). The 6D layout is (R00, R10, R20, R01, R11, R21) (motiondiff.geometry.rotations.matrix_to_6d).
 _SIX_D_SIGNS = np.array([1.0, -1.0, -1.0, -1.0, 1.0, 1.0])
 
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import gradio as gr
 
 from motiondiff.demo.models import MAX_SAMPLES, DemoModels, Sample, download_kinds, generate, glb_note
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 log = logging.getLogger(__name__)
 VIEWER_HEIGHT = 600  # px; the viewer page fills it (plot and play bar)

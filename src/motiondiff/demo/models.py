@@ -17,11 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.errors import UsageError
 from motiondiff.export.blender import blender_command, convert_bvh
-from motiondiff.paths import SHIPPED_MODELS
+from motiondiff.model_files.resolve import MODELS_DIR, SHIPPED_MODELS
 from motiondiff.pipelines import GuidedMotionPipeline, MotionOutput, MotionPipeline
-from motiondiff.pipelines.motion import MODELS_DIR
+from motiondiff.runtime.errors import UsageError
 
 MAX_SAMPLES = 4  # samples per request: the page has this many result slots
 GLB_INCLUDED = "GLB: included (written by Blender from the BVH). BVH, GLB and NPZ are offered."

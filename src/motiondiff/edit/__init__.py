@@ -5,7 +5,7 @@ Public API: `load_input_motion` and `dataset_motions` (a BVH file, joints .npy o
 representation), `inbetween` and `edit_parts` (B edits at once, an `EditResult`), `generate_long` (timed prompts in
 one continuous motion), `smooth_joints` / `smoothness_of_joints` (vvMDM's temporal filter and its metric),
 `clean_foot_skate` / `foot_sliding` (feet pinned during ground contacts, and the sliding they had), the
-sampling options every edit takes (`SamplingOptions`), the masks (`frame_keep`, `part_keep`, `resolve_joints`) and
+sampling options every edit takes (`SamplingOptions`), the masks (`frame_keep`, `resolve_joints`; a part's dims: `Representation.part_keep`) and
 `close_root_path` (HumanML3D root closure after in-betweening)."""
 
 from motiondiff.edit.api import EditResult, edit_parts, inbetween
@@ -13,7 +13,7 @@ from motiondiff.edit.foot_cleanup import FootCleanup, clean_foot_skate, foot_sli
 from motiondiff.edit.inpaint import EDIT_MODES, SamplingOptions, inpaint
 from motiondiff.edit.inputs import InputMotion, dataset_motions, load_input_motion
 from motiondiff.edit.long_motion import LongMotion, generate_long
-from motiondiff.edit.masks import EditError, frame_keep, part_keep, resolve_joints, to_frames
+from motiondiff.edit.masks import EditError, frame_keep, resolve_joints, to_frames
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.edit.trajectory import close_root_path, needs_root_closure
 
@@ -36,7 +36,6 @@ __all__ = [
     "inpaint",
     "load_input_motion",
     "needs_root_closure",
-    "part_keep",
     "resolve_joints",
     "smooth_joints",
     "smoothness_of_joints",

@@ -23,11 +23,11 @@ from motiondiff.data.representations import Representation
 from motiondiff.edit.blend import DEFAULT_FRAMES, blend_boundaries
 from motiondiff.edit.inpaint import SamplingOptions, inpaint
 from motiondiff.edit.inputs import InputMotion
-from motiondiff.edit.masks import EditError, frame_keep, part_keep, resolve_joints, to_frames
+from motiondiff.edit.masks import EditError, frame_keep, resolve_joints, to_frames
 from motiondiff.edit.trajectory import close_root_path, needs_root_closure
+from motiondiff.geometry.skeleton import Skeleton
 from motiondiff.lit.conditions import check_action
 from motiondiff.lit.generation import check_finite_output
-from motiondiff.skeleton import Skeleton
 
 
 @dataclass
@@ -228,7 +228,7 @@ def edit_parts(
     if not joints:
         raise EditError(f"the parts {parts!r} are the whole body ({rep.skeleton.name}), leaving nothing to keep: "
                         "generate a new motion instead (sample.py)")  # fmt: skip
-    dims = part_keep(rep, joints)
+    dims = rep.part_keep(joints)
     if dims.all():
         raise EditError(f"the parts {parts!r} leave the whole {rep.skeleton.name} motion kept, nothing to generate")
     keeps = [np.repeat(dims[None], m.num_frames, axis=0) for m in motions]

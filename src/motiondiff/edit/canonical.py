@@ -26,8 +26,8 @@ import torch
 
 from motiondiff.data.representations import HMLRepresentation, JointPositions, Representation, RotationRepresentation
 from motiondiff.data.representations.hml import recover_root_torch
-from motiondiff.rotations import matrix_to_quat, qmul
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.rotations import matrix_to_quat, qmul
+from motiondiff.geometry.skeleton import Skeleton
 
 UP = np.array([0.0, 1.0, 0.0])
 

@@ -11,8 +11,8 @@ import numpy as np
 
 from motiondiff.edit.foot_cleanup import clean_foot_skate
 from motiondiff.edit.rigid_bones import rigid_bones
-from motiondiff.errors import UsageError
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.errors import UsageError
 
 CLEANUPS = ("bones", "feet")  # the order they run in
 HELP = ("cleanup=bones (one fixed skeleton: the files of every format then agree with the joints), cleanup=feet "

@@ -31,9 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from motiondiff.motion_checks import check_motion
-from motiondiff.rotations import any_perpendicular, qbetween, qrot
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.motion_checks import check_motion
+from motiondiff.geometry.rotations import any_perpendicular, qbetween, qrot
+from motiondiff.geometry.skeleton import Skeleton
 
 CONTACT_HEIGHT_M = 0.05
 CONTACT_SPEED_M_S = 0.5

@@ -20,8 +20,8 @@ from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face, skeleton_for_dim
 from motiondiff.edit.canonical import carries_placement, placement, to_canonical
 from motiondiff.edit.masks import EditError
-from motiondiff.paths import REPO_DIR, work_dir
-from motiondiff.skeleton import Skeleton, get_skeleton
+from motiondiff.geometry.skeleton import Skeleton, get_skeleton
+from motiondiff.runtime.paths import REPO_DIR, work_dir
 
 MIN_INPUT_FRAMES = 4  # at least a kept frame on each side of a gap and something to generate
 SPLIT_ORDER = ("test", "val", "train")  # where a bare clip id is looked up, in this order
@@ -235,7 +235,7 @@ def _npy_features(path: Path, module, start: int, frames: int | None, up_axis: s
 def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """Rig joints moved rigidly as `prepare` placed the native skeleton: lowest joint on the floor, frame 0's root
     at the x/z origin facing +Z (as given when the skeleton has no facing joints)."""
-    from motiondiff.rotations import qrot
+    from motiondiff.geometry.rotations import qrot
 
     if skeleton.face_joints is None:
         return joints

@@ -13,8 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from motiondiff.data.representations import Representation
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
 
 DEFAULT_FRACTION = 0.25  # MDM's in-betweening keeps the first and last quarter by default
 
@@ -102,13 +101,3 @@ def resolve_joints(skeleton: Skeleton, spec: str | int | Sequence[str | int]) ->
                 f"{', '.join(sorted(skeleton.parts))} (or joint names: {', '.join(skeleton.joint_names)})"
             )
     return tuple(sorted(joints))
-
-
-def part_keep(representation: Representation, joints: Sequence[int]) -> np.ndarray:
-    """(D,) bool over the representation's feature dims: True on every dim of the given joints (the root's include
-    the trajectory: its velocities or position and, for HumanML3D, its height)."""
-    dims = representation.joint_dims()
-    keep = np.zeros(representation.dim, dtype=bool)
-    for j in joints:
-        keep[dims[j]] = True
-    return keep

@@ -18,10 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motiondiff.inverse_kinematics import fit_rest_offsets, fit_rotations
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.motion_checks import check_motion
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.inverse_kinematics import fit_rest_offsets, fit_rotations
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.motion_checks import check_motion
+from motiondiff.geometry.skeleton import Skeleton
 
 TWIST_HALF_LIFE_S = 1.0  # as the exports' IK
 FIT_ABOVE_M = 1e-4  # IK error above which the polish runs (a real, rigid clip is reproduced to float precision)

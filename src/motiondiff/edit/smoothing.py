@@ -29,7 +29,7 @@ from motiondiff.data.representations.hml_features import (
     joints_from_features,
     skeleton_for_dim,
 )
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
 
 MIN_FRAMES = 4  # HumanML3D features drop one frame; the metric's second difference needs three rows
 
@@ -50,7 +50,7 @@ def smoothness_of_joints(joints: np.ndarray, skeleton: Skeleton, alpha: float = 
     measured on its HumanML3D features as evaluate.py does; None for motions too short to measure."""
     if len(joints) < MIN_FRAMES:
         return None
-    from motiondiff.eval.metrics import smoothness  # torchmetrics (2 s to import): not for every sampling command
+    from motiondiff.metrics import smoothness  # torchmetrics (2 s to import): not for every sampling command
 
     feats = features_from_canonical(canonicalize_joints(joints, skeleton), skeleton)
     return smoothness(feats, alpha)

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from motiondiff.data.representations import HMLRepresentation, Representation
-from motiondiff.rotations import qinv, qrot
+from motiondiff.geometry.rotations import qinv, qrot
 
 TURN, STEP = 0, slice(1, 3)  # dims of ω and of the x/z velocity in a HumanML3D row
 

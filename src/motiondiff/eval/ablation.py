@@ -18,8 +18,8 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig
 
-from motiondiff.atomic import atomic_write
 from motiondiff.eval import report
+from motiondiff.runtime.atomic import atomic_write
 
 TITLES = {
     "prediction_representation": "Prediction x representation (trans_enc backbone)",

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
+from motiondiff.runtime.atomic import atomic_write
 
 
 def confusion(asked: Sequence[int], predicted: Sequence[int], num_classes: int) -> np.ndarray:

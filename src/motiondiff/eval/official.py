@@ -27,9 +27,9 @@ from motiondiff.data.representations import JointPositions, RotationRepresentati
 from motiondiff.data.representations.hml_features import feature_slices
 from motiondiff.data.sources.smpl_clips import UP_TO_Y
 from motiondiff.eval.protocol import Evaluators, pad
-from motiondiff.models.evaluators.networks import load_official_action_classifier, load_official_t2m_evaluator
+from motiondiff.geometry.rotations import quat_to_matrix
+from motiondiff.model_files.evaluators import load_official_action_classifier, load_official_t2m_evaluator
 from motiondiff.models.evaluators.stgcn import load_official_uestc_recognition
-from motiondiff.rotations import quat_to_matrix
 
 log = logging.getLogger(__name__)
 

@@ -22,12 +22,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff import metrics as M
 from motiondiff.data.datasets import MotionDataset
 from motiondiff.data.representations.hml_features import joints_from_features
 from motiondiff.data.representations.spec import bridge_from_spec
-from motiondiff.eval import metrics as M
 from motiondiff.lit.generation import generate_features
-from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, load_released, motion_input
+from motiondiff.model_files.evaluators import load_released
+from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, motion_input
 
 log = logging.getLogger(__name__)
 TEXT_MOTION, ACTION = "text_motion", "action"

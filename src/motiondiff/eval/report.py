@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write, finite_or_null
+from motiondiff.runtime.atomic import atomic_write, finite_or_null
 
 Summary = dict[str, tuple[float, float, int]]
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import torch
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 log = logging.getLogger(__name__)
 KEY = "callbacks.evaluation.videos"

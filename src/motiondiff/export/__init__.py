@@ -14,12 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
 from motiondiff.export.bvh_export import ExportReport, export_bvh, export_bvh_from_features
 from motiondiff.export.html_viewer import export_html
 from motiondiff.export.render import Title, render_motion
 from motiondiff.export.smpl_export import export_smpl, export_smpl_from_features, smpl_joints
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.atomic import atomic_write
 
 __all__ = ["FORMATS", "ExportReport", "export_bvh", "export_bvh_from_features", "export_html", "export_motion",
            "export_smpl", "export_smpl_from_features", "smpl_joints"]  # fmt: skip

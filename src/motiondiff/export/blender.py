@@ -15,7 +15,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 BLENDER_FORMATS = ("fbx", "glb")
 INSTALL_HINT = (

@@ -9,7 +9,7 @@ other joints 'Zrotation Xrotation Yrotation'. End Sites: every leaf (SMPL-22's h
 real length, so animation tools draw the leaf's bone (a zero End Site makes Blender warn "zero length node"):
 `Skeleton.end_sites`, along the leaf's own bone, as long as the top of the head (0.065 H), the toes past the ball
 of the foot (0.041 H) and the hand (0.108 H) of a body of standing height H estimated from the leg (anatomical
-proportions of Drillis & Contini, see `motiondiff.skeleton.END_SITE_STATURE`).
+proportions of Drillis & Contini, see `motiondiff.geometry.skeleton.END_SITE_STATURE`).
 
 Every export reports its fit error: the distance between the written motion's forward kinematics and the joints
 it was made from (metres, before `scale`).
@@ -27,10 +27,10 @@ import numpy as np
 
 from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
 from motiondiff.export.rig_names import with_rig_names
-from motiondiff.inverse_kinematics import fit_rest_offsets, fit_rotations, solve_rotations
-from motiondiff.motion_checks import check_motion
-from motiondiff.rotations import matrix_to_quat, qfix, qnormalize
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.inverse_kinematics import fit_rest_offsets, fit_rotations, solve_rotations
+from motiondiff.geometry.motion_checks import check_motion
+from motiondiff.geometry.rotations import matrix_to_quat, qfix, qnormalize
+from motiondiff.geometry.skeleton import Skeleton
 
 if TYPE_CHECKING:
     from motiondiff.data.representations import Representation

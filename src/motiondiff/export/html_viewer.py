@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
 from motiondiff.export.render import Title, _chain_color, camera_azimuth, head_joint, title_at
-from motiondiff.motion_checks import check_motion
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.motion_checks import check_motion
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.atomic import atomic_write
 
 __all__ = ["export_html"]
 

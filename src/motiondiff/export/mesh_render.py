@@ -26,7 +26,7 @@ from motiondiff.export.render import (
     video_axes,
     wrap_title,
 )
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
 
 BODY_RGB = np.array([0.80, 0.80, 0.82])  # light gray, darker than the ground grid wherever it is lit
 AMBIENT = 0.3  # the share of the light that faces turned away from it still get

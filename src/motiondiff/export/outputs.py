@@ -15,7 +15,6 @@ import numpy as np
 
 from motiondiff.data.formats.smpl_params import SmplBody
 from motiondiff.data.representations import Representation
-from motiondiff.errors import UsageError
 from motiondiff.export import export_motion
 from motiondiff.export.blender import BLENDER_FORMATS, check_blender, convert_bvh
 from motiondiff.export.bvh_export import export_bvh, export_bvh_from_features
@@ -24,7 +23,8 @@ from motiondiff.export.render import Title
 from motiondiff.export.rig_names import with_rig_names
 from motiondiff.export.smpl_export import check_smpl_skeleton, export_smpl, export_smpl_from_features
 from motiondiff.export.smpl_mesh import check_mesh_skeleton, smpl_vertices
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.errors import UsageError
 
 OUTPUT_FORMATS = ("mp4", "gif", "bvh", "html", "smpl", *BLENDER_FORMATS)  # the arrays (.npy) are always written
 ROTATION_FORMATS = ("bvh", "smpl")  # written from the features (a model's own rotations), or solved from changed joints

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.atomic import atomic_write
 
 # Left limbs blue, right limbs red, torso dark: the usual convention in motion papers.
 _COLORS = {"left": "#1f77b4", "right": "#d62728", "torso": "#333333"}

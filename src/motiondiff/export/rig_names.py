@@ -8,8 +8,8 @@ import json
 from functools import cache
 from importlib import resources
 
-from motiondiff.errors import UsageError
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.errors import UsageError
 
 
 @cache

@@ -31,14 +31,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
-from motiondiff.errors import UsageError
 from motiondiff.export.bvh_export import TWIST_HALF_LIFE_S, ExportReport
-from motiondiff.inverse_kinematics import fit_rest_offsets, fit_rotations
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.motion_checks import check_motion
-from motiondiff.rotations import matrix_to_quat, qnormalize, quat_to_rotvec, rotvec_to_quat
-from motiondiff.skeleton import SMPL22, SMPL24, Skeleton
+from motiondiff.geometry.inverse_kinematics import fit_rest_offsets, fit_rotations
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.motion_checks import check_motion
+from motiondiff.geometry.rotations import matrix_to_quat, qnormalize, quat_to_rotvec, rotvec_to_quat
+from motiondiff.geometry.skeleton import SMPL22, SMPL24, Skeleton
+from motiondiff.runtime.atomic import atomic_write
+from motiondiff.runtime.errors import UsageError
 
 if TYPE_CHECKING:
     from motiondiff.data.representations import Representation

@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.data.formats.smpl_params import BODY_JOINTS, SmplBody, SmplParamsError, load_smpl_body
-from motiondiff.errors import UsageError
 from motiondiff.export.smpl_export import SMPL_NEUTRAL_PELVIS, check_smpl_skeleton, smpl_parameters
-from motiondiff.rotations import rotvec_to_quat
-from motiondiff.skeleton import SMPL22, SMPL24, Skeleton
+from motiondiff.geometry.rotations import rotvec_to_quat
+from motiondiff.geometry.skeleton import SMPL22, SMPL24, Skeleton
+from motiondiff.runtime.errors import UsageError
 
 RENDERS = ("stick", "mesh")
 GET_MODEL = ("the SMPL body model is licence-restricted and not shipped: register at smpl.is.tue.mpg.de, download "

@@ -14,7 +14,7 @@ from typing import Any
 import torch
 from lightning.pytorch.plugins.io import TorchCheckpointIO
 
-from motiondiff.atomic import atomic_write
+from motiondiff.runtime.atomic import atomic_write
 
 
 class AtomicCheckpointIO(TorchCheckpointIO):

@@ -9,7 +9,7 @@ import os
 import numpy as np
 import torch
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 CLIP_PATH_ENV = "MOTIONDIFF_CLIP_PATH"  # the local CLIP folder of a model whose config names CLIP without one
 

@@ -21,7 +21,7 @@ from torch import nn
 
 from motiondiff.data.mirror import mirrored_labels
 from motiondiff.data.representations.hml_features import evaluator_std, skeleton_for_dim
-from motiondiff.eval.metrics import r_precision
+from motiondiff.metrics import r_precision
 from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, motion_input
 
 

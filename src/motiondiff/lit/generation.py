@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import condition_batch
 from motiondiff.models.bf16_inference import bf16_inference
+from motiondiff.runtime.errors import UsageError
 
 MAX_NUM_SAMPLES = 1000  # motions per prompt (or per edited motion) in one run
 SAMPLE_BATCH = 64  # motions sampled at once: noise and activations for this many, whatever num_samples asks

@@ -14,9 +14,8 @@ import torch
 from motiondiff.data.representations.spec import representation_from_spec
 from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, dpmpp_sample, guided_model_fn, make_betas
 from motiondiff.diffusion.thresholding import make_threshold
-from motiondiff.edit.masks import part_keep
+from motiondiff.lit.geometric_losses import GeometricLoss
 from motiondiff.lit.known_masks import random_known_keep
-from motiondiff.losses import GeometricLoss
 from motiondiff.models.backbones import build_backbone
 from motiondiff.models.conditioning import build_condition
 from motiondiff.models.denoiser import MDMDenoiser
@@ -124,7 +123,7 @@ class MotionDiffusion(torch.nn.Module):
         self.known_conditioning = dict(known_conditioning or {})
         if self.known_conditioning:
             skeleton = self.representation.skeleton
-            parts = [part_keep(self.representation, joints) for joints in skeleton.parts.values()]
+            parts = [self.representation.part_keep(joints) for joints in skeleton.parts.values()]
             self.register_buffer("part_masks", torch.tensor(np.array(parts), dtype=torch.bool), persistent=False)
 
     @property

@@ -16,7 +16,7 @@ import lightning as L
 import numpy as np
 import torch
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 KEY = "motiondiff_resume"
 

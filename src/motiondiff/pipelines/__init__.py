@@ -6,7 +6,8 @@ out = pipe("a person walks forward", seconds=4)
 out.save("out", formats=["bvh", "mp4"])
 """
 
-from motiondiff.pipelines.motion import MotionPipeline, resolve_model
+from motiondiff.model_files.resolve import find_model
+from motiondiff.pipelines.motion import MotionPipeline
 from motiondiff.pipelines.output import MotionOutput
 
 
@@ -20,4 +21,4 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["GuidedMotionPipeline", "MotionOutput", "MotionPipeline", "resolve_model"]
+__all__ = ["GuidedMotionPipeline", "MotionOutput", "MotionPipeline", "find_model"]

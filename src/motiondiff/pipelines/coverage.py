@@ -11,8 +11,8 @@ import logging
 import warnings
 from pathlib import Path
 
-from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import prompt_features
+from motiondiff.runtime.errors import UsageError
 from motiondiff.text.coverage import CoverageReport, PromptCoverage, coverage_path
 from motiondiff.text.prompt_mapping import PromptMapping, check_mode
 

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.errors import UsageError
 from motiondiff.guided.local_actions import (
     LocalActionError,
     check_weights,
@@ -27,10 +26,11 @@ from motiondiff.guided.local_actions import (
 from motiondiff.lit.conditions import text_encoder_kwargs
 from motiondiff.lit.generation import SAMPLE_BATCH, check_finite_output, check_num_samples
 from motiondiff.lit.latent import LATENT_SAMPLERS, HierarchicalLatentModule
-from motiondiff.lit.loading import load_latent_model, load_model
+from motiondiff.model_files.loading import load_latent_model, load_model
+from motiondiff.model_files.resolve import find_model
 from motiondiff.models.hierarchical import LEVELS
-from motiondiff.pipelines.motion import resolve_model
 from motiondiff.pipelines.output import MotionOutput
+from motiondiff.runtime.errors import UsageError
 
 
 def level_steps_of(latent: HierarchicalLatentModule, level_steps=None) -> dict[str, int]:
@@ -58,9 +58,9 @@ class GuidedMotionPipeline:
                         device: str = "cpu"):  # fmt: skip
         """The released GuidedMotion model ("guidedmotion"), a release's .safetensors or a train_latent.py .ckpt;
         ``local_model``: the text model that makes the local actions (None: give them yourself)."""
-        path = resolve_model(path) if str(path) == "guidedmotion" else Path(path)
+        path = find_model(path, condition="guidedmotion")
         latent = load_latent_model(path, device)
-        mdm = None if local_model is None else load_model(resolve_model(local_model), device)
+        mdm = None if local_model is None else load_model(find_model(local_model), device)
         return cls(latent, mdm, str(path))
 
     @property

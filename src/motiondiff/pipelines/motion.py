@@ -24,8 +24,6 @@ from motiondiff.edit.inputs import InputMotion, load_input_motion
 from motiondiff.edit.long_motion import generate_long
 from motiondiff.edit.masks import EditError
 from motiondiff.edit.smoothing import smooth_joints
-from motiondiff.errors import UsageError
-from motiondiff.hardware import inference_precision
 from motiondiff.lit.conditions import check_action, generation_frames, repeated
 from motiondiff.lit.generation import (
     MAX_LONG_SAMPLES,
@@ -35,33 +33,14 @@ from motiondiff.lit.generation import (
     generate_features,
     sampling_precision,
 )
-from motiondiff.lit.loading import load_model
 from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
-from motiondiff.paths import REPO_DIR, SHIPPED_MODELS
+from motiondiff.model_files.loading import load_model
+from motiondiff.model_files.resolve import find_model
 from motiondiff.pipelines.coverage import load_coverage, warn_far
 from motiondiff.pipelines.output import MotionOutput
-from motiondiff.prompt_text import check_text
-
-MODELS_DIR = REPO_DIR / "checkpoints" / "models"
-
-
-def resolve_model(name_or_path: str | Path) -> Path:
-    """A released model's name ("text", "action", or a file stem in checkpoints/models; "shipped", as on the command
-    line, is the text model) or a .ckpt/.safetensors path."""
-    key = str(name_or_path)
-    if key == "shipped":
-        key = "text"
-    if key in SHIPPED_MODELS:
-        path = SHIPPED_MODELS[key]
-    elif (MODELS_DIR / f"{key}.safetensors").is_file():
-        path = MODELS_DIR / f"{key}.safetensors"
-    else:
-        path = Path(key)
-    if not path.is_file():
-        names = sorted({*SHIPPED_MODELS, *(p.stem for p in MODELS_DIR.glob("*.safetensors"))})
-        raise UsageError(f"no model {key!r}: give a released model ({', '.join(names)}) or a path to a .ckpt or "
-                         ".safetensors file")  # fmt: skip
-    return path
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.hardware import inference_precision
+from motiondiff.runtime.prompt_text import check_text
 
 
 class MotionPipeline:
@@ -80,7 +59,7 @@ class MotionPipeline:
         """A released model by name ("text", "action", ...) or a .ckpt/.safetensors path. ``precision``: "auto"
         samples in bf16 where the hardware runs it natively (measured: docs/results/few_step_sampling.md), "32" in
         full precision, "bf16" forced."""
-        path = resolve_model(name_or_path)
+        path = find_model(name_or_path)
         return cls(load_model(path, device), str(path), precision)
 
     # ---- what the model does ------------------------------------------------------------------------------------

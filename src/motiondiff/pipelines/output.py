@@ -9,13 +9,13 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import finite_or_null, save_npy, write_json
 from motiondiff.data.representations import Representation
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.export.naming import motion_stems
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
 from motiondiff.export.smpl_mesh import render_body
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.atomic import finite_or_null, save_npy, write_json
 
 
 @dataclass

@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.eval import action_table, report
-from motiondiff.paths import REPO_DIR
+from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.runtime.paths import REPO_DIR
 
 PARAPHRASES = REPO_DIR / "data" / "paraphrases" / "bandai_human.json"
 
@@ -79,15 +79,16 @@ def main(argv: list[str]) -> None:
     import os
 
     from motiondiff.eval.protocol import Evaluators
-    from motiondiff.lit.loading import load_model as load_module
-    from motiondiff.paths import find_checkpoint, work_dir
+    from motiondiff.model_files.loading import load_model as load_module
+    from motiondiff.model_files.resolve import find_model
     from motiondiff.pipelines.coverage import load_prompt_mapping
+    from motiondiff.runtime.paths import work_dir
     from motiondiff.studies.behaviour import sampling_args
     from motiondiff.studies.config import study_config
 
     cfg = study_config("action_accuracy", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))
-    ckpt = find_checkpoint(cfg.checkpoint, outputs)
+    ckpt = find_model(cfg.checkpoint, outputs)
     module = load_module(ckpt)
     if module.condition_kind != "text":
         raise SystemExit(f"{ckpt} is a {module.condition_kind} model; descriptions are for text models")
@@ -125,6 +126,6 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     user_errors(main)(sys.argv[1:])

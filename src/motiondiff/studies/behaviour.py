@@ -23,8 +23,8 @@ from omegaconf import OmegaConf
 
 from motiondiff.data.preparing.captions import measure
 from motiondiff.edit.measures import mean_joint_acceleration, mean_joint_speed
-from motiondiff.paths import CONF_DIR
 from motiondiff.pipelines import MotionPipeline
+from motiondiff.runtime.paths import CONF_DIR
 
 # prompt, seconds, dataset label of the real clips it should resemble
 DEFAULT_PROMPTS = (
@@ -263,13 +263,14 @@ def main(argv: list[str]) -> None:
 
     from motiondiff.eval import action_table
     from motiondiff.eval.protocol import Evaluators
-    from motiondiff.lit.loading import load_model as load_module
-    from motiondiff.paths import REPO_DIR, find_checkpoint, work_dir
+    from motiondiff.model_files.loading import load_model as load_module
+    from motiondiff.model_files.resolve import find_model
+    from motiondiff.runtime.paths import REPO_DIR, work_dir
     from motiondiff.studies.config import study_config
 
     cfg = study_config("behaviour", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))
-    ckpt = find_checkpoint(cfg.checkpoint, outputs)
+    ckpt = find_model(cfg.checkpoint, outputs)
     module = load_module(ckpt)
     dataset = module.hparams.get("dataset") or "bandai_mini"
     data_root = cfg.data or str(REPO_DIR / "data" / dataset)
@@ -304,6 +305,6 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     user_errors(main)(sys.argv[1:])

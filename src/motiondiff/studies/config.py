@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.errors import UsageError
-from motiondiff.paths import CONF_DIR
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import CONF_DIR
 
 _KINDS = {bool: "true or false", int: "a whole number", float: "a number", str: "text", list: "a list [a, b, ...]"}
 _SAMPLING = {"steps": int, "guidance": float, "smooth_sigma": float}

@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.edit.measures import SPEED_FLOOR, boundary_jumps, edit_numbers
 from motiondiff.edit.smoothing import smoothness_of_joints
+from motiondiff.runtime.atomic import finite_or_null, write_json
 
 MAX_RATIO = 3.0  # a boundary step at most 3x the generated middle's typical speed counts as seamless
 WRISTS_UP_SHARE = 0.25  # share of frames with both wrists above the head that counts as "hands raised"
@@ -285,16 +285,17 @@ def format_report(report: dict, checkpoint: str = "") -> str:
 
 def main(argv: list[str]) -> Path:
     from motiondiff.edit.masks import EditError
-    from motiondiff.errors import UsageError
-    from motiondiff.lit.loading import load_model as load_module
-    from motiondiff.paths import REPO_DIR, find_checkpoint
-    from motiondiff.scripting import quiet_tool_caches
+    from motiondiff.model_files.loading import load_model as load_module
+    from motiondiff.model_files.resolve import find_model
+    from motiondiff.runtime.errors import UsageError
+    from motiondiff.runtime.paths import REPO_DIR
+    from motiondiff.runtime.scripting import quiet_tool_caches
     from motiondiff.studies.config import study_config
 
     quiet_tool_caches()
     cfg = study_config("editing", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
-    ckpt = find_checkpoint(cfg.checkpoint, outputs)
+    ckpt = find_model(cfg.checkpoint, outputs)
     module = load_module(ckpt, cfg.device)
     sampling = {k: cfg[k] for k in ("sampler", "eta", "resample", "hold_from", "reconstruction", "steps")}
     if cfg.guidance is not None:
@@ -319,6 +320,6 @@ def main(argv: list[str]) -> Path:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     user_errors(main)(sys.argv[1:])

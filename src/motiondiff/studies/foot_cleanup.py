@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.edit.foot_cleanup import clean_foot_skate, foot_sliding
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.atomic import finite_or_null, write_json
 
 OUT = Path(__file__).resolve().parents[3] / "docs" / "results" / "foot_cleanup"
 
@@ -134,6 +134,6 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     user_errors(main)()

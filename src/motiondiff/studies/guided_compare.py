@@ -25,12 +25,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.atomic import finite_or_null, write_json
 from motiondiff.bench.timing import median_seconds as timed_median
-from motiondiff.errors import UsageError
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
 from motiondiff.lit.conditions import text_encoder_kwargs
-from motiondiff.paths import REPO_DIR, shown
+from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import REPO_DIR, shown
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "comparison"
 # Tab. 4's rows: (level the hierarchy stops at and decodes, local-action energy guidance on)
@@ -207,9 +207,9 @@ def main(argv: list[str] | None = None) -> int:
     from motiondiff.data.datamodules import PreparedDataModule
     from motiondiff.eval.protocol import EvalClips, Evaluators
     from motiondiff.guided.local_actions import check_same_features
-    from motiondiff.lit.loading import load_latent_model
-    from motiondiff.lit.loading import load_model as load_module
-    from motiondiff.paths import find_checkpoint
+    from motiondiff.model_files.loading import load_latent_model
+    from motiondiff.model_files.loading import load_model as load_module
+    from motiondiff.model_files.resolve import find_model
     from motiondiff.studies.config import study_config
     from motiondiff.text.encoders import build_text_encoder
     from motiondiff.text.graph_features import graph_table
@@ -219,10 +219,10 @@ def main(argv: list[str] | None = None) -> int:
     if len(cfg.level_steps) != 3:
         raise UsageError(f"level_steps must be three numbers [motion, action, specific], got {list(cfg.level_steps)}")
     latent_path = Path(cfg.latent)
-    mdm_path = find_checkpoint(cfg.mdm, REPO_DIR / "outputs")
+    mdm_path = find_model(cfg.mdm, REPO_DIR / "outputs")
     latent = load_latent_model(latent_path)
     mdm = load_module(mdm_path)
-    local_path = find_checkpoint(cfg.local_model or str(mdm_path), REPO_DIR / "outputs")
+    local_path = find_model(cfg.local_model or str(mdm_path), REPO_DIR / "outputs")
     local_mdm = mdm if local_path == mdm_path else load_module(local_path)
     check_same_features(local_mdm, latent)
     check_same_features(mdm, latent)
@@ -272,6 +272,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     sys.exit(user_errors(main)())

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import write_json
-from motiondiff.paths import REPO_DIR, shown
+from motiondiff.runtime.atomic import write_json
+from motiondiff.runtime.paths import REPO_DIR, shown
 
 OUT_OF_DOMAIN = REPO_DIR / "data" / "coverage" / "out_of_domain.json"
 HELD_OUT = {"bandai_human": REPO_DIR / "data" / "paraphrases" / "bandai_human.json",
@@ -51,15 +51,16 @@ def main(argv: list[str]) -> None:
     import matplotlib.pyplot as plt
 
     from motiondiff.lit.conditions import text_encoder_kwargs
-    from motiondiff.lit.loading import load_model
-    from motiondiff.paths import find_checkpoint, work_dir
+    from motiondiff.model_files.loading import load_model
+    from motiondiff.model_files.resolve import find_model
+    from motiondiff.runtime.paths import work_dir
     from motiondiff.studies.config import study_config
     from motiondiff.text.coverage import build_coverage, choose_threshold, coverage_path
     from motiondiff.text.encoders import build_text_encoder
 
     cfg = study_config("prompt_coverage", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))
-    release = find_checkpoint(cfg.checkpoint, outputs)
+    release = find_model(cfg.checkpoint, outputs)
     if release.suffix == ".ckpt":
         raise SystemExit(f"{release}: a coverage bank belongs beside a release; release the checkpoint first")
     module = load_model(release)
@@ -129,6 +130,6 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     user_errors(main)(sys.argv[1:])

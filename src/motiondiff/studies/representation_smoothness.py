@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
-from motiondiff.eval.metrics import smoothness
 from motiondiff.eval.report import write_markdown
+from motiondiff.metrics import smoothness
 
 ORDER = ("jp", "rp6jr", "rpqjr", "rpajr", "rpejr", "rpmjr", "hml263")  # vvMDM Fig. 2's six, then HumanML3D's
 OUT = Path(__file__).resolve().parents[3] / "docs" / "results" / "representation_smoothness"
@@ -82,6 +82,6 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     user_errors(main)()

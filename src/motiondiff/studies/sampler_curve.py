@@ -19,9 +19,9 @@ import json
 import sys
 from pathlib import Path
 
-from motiondiff.atomic import finite_or_null, write_json
-from motiondiff.errors import UsageError
-from motiondiff.paths import REPO_DIR
+from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import REPO_DIR
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "sampler_curve"
 METRICS = ("fid", "r_precision_top3", "mm_dist", "diversity")
@@ -120,6 +120,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     sys.exit(user_errors(main)())

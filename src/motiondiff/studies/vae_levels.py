@@ -22,13 +22,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.checked_loading import torch_load
-from motiondiff.errors import UsageError
 from motiondiff.eval import report
 from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_metrics
 from motiondiff.lit.vae import MotionVAEModule, mpjpe
 from motiondiff.models.vae import LEVEL_TOKENS
-from motiondiff.paths import REPO_DIR, shown
+from motiondiff.runtime.checked_loading import torch_load
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import REPO_DIR, shown
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "vae_levels"
 # column key, header (metric keys come from lit.vae.mpjpe and protocol.replication_metrics)
@@ -66,7 +66,7 @@ def datamodule(module: MotionVAEModule, data_root: str | None):
     from hydra import compose, initialize_config_dir
     from hydra.utils import instantiate
 
-    from motiondiff.scripting import register_resolvers
+    from motiondiff.runtime.scripting import register_resolvers
 
     register_resolvers()
     hp = module.hparams
@@ -198,7 +198,7 @@ def format_table(rows: dict, infos: dict, pairs: list[dict], notes: list[str]) -
 
 
 def main(argv: list[str]) -> Path:
-    from motiondiff.scripting import quiet_tool_caches
+    from motiondiff.runtime.scripting import quiet_tool_caches
     from motiondiff.studies.config import study_config
 
     quiet_tool_caches()
@@ -251,6 +251,6 @@ def main(argv: list[str]) -> Path:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     user_errors(main)(sys.argv[1:])

@@ -21,11 +21,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motiondiff.atomic import finite_or_null, write_json
-from motiondiff.errors import UsageError
 from motiondiff.eval.report import mean_ci
 from motiondiff.lit.conditions import text_encoder_kwargs
-from motiondiff.paths import REPO_DIR, find_checkpoint
+from motiondiff.model_files.resolve import find_model
+from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import REPO_DIR
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "weight_control"
 MOVING = ("walk", "run", "dash", "jog", "step")
@@ -152,8 +153,8 @@ def write(out: Path, meta: dict, results: list[dict], summary: dict) -> None:
 def main(argv: list[str] | None = None) -> int:
     from motiondiff.data.datamodules import PreparedDataModule
     from motiondiff.eval.protocol import Evaluators
-    from motiondiff.lit.loading import load_latent_model
-    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.model_files.loading import load_latent_model
+    from motiondiff.model_files.loading import load_model as load_module
     from motiondiff.studies.config import study_config
     from motiondiff.text.encoders import build_text_encoder
 
@@ -166,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
         raise UsageError(f"level_steps must be three numbers [motion, action, specific], got {list(cfg.level_steps)}")
     ckpt = Path(cfg.checkpoint)
     module = load_latent_model(ckpt)
-    mdm = load_module(find_checkpoint(cfg.local_model, REPO_DIR / "outputs"))
+    mdm = load_module(find_model(cfg.local_model, REPO_DIR / "outputs"))
     encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
     data = Path(cfg.data or REPO_DIR / "data" / "bandai_mini_compositional")
     evaluators = Evaluators.load(REPO_DIR / "checkpoints" / "evaluators" / data.name).for_module(mdm)
@@ -193,6 +194,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    from motiondiff.scripting import user_errors
+    from motiondiff.runtime.scripting import user_errors
 
     sys.exit(user_errors(main)())

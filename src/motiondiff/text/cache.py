@@ -17,7 +17,7 @@ from safetensors import SafetensorError, safe_open
 from safetensors.torch import save_file
 from torch import Tensor
 
-from motiondiff.atomic import atomic_write
+from motiondiff.runtime.atomic import atomic_write
 from motiondiff.text.encoders import TextEncoder, check_texts
 
 _TENSOR_KEY = "embeddings"

@@ -83,7 +83,7 @@ class PromptCoverage:
     def save(self, path: str | Path) -> Path:
         from safetensors.numpy import save_file
 
-        from motiondiff.atomic import atomic_write
+        from motiondiff.runtime.atomic import atomic_write
 
         meta = {"action_names": json.dumps(self.action_names), "threshold": repr(float(self.threshold)),
                 "encoder": self.encoder}  # fmt: skip

@@ -108,7 +108,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from motiondiff.atomic import atomic_write
+from motiondiff.runtime.atomic import atomic_write
 from motiondiff.text.parse_lexicon import SEQUENCE_WORDS, get_nlp
 from motiondiff.text.parse_rules import action_words, arguments_of, find_actions
 

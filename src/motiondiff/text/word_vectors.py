@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.safe_pickle import BUILTIN_DATA, load_pickle
+from motiondiff.runtime.safe_pickle import BUILTIN_DATA, load_pickle
 
 POS_CATEGORIES = ("VERB", "NOUN", "DET", "ADP", "NUM", "AUX", "PRON", "ADJ", "ADV",
                   "Loc_VIP", "Body_VIP", "Obj_VIP", "Act_VIP", "Desc_VIP", "OTHER")  # fmt: skip

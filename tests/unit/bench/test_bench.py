@@ -41,7 +41,7 @@ def test_peak_memory_sees_an_allocation_that_is_freed_again():
 
 def test_a_long_chain_is_timed_over_its_first_steps():
     from motiondiff.bench.workloads import sampling
-    from motiondiff.lit.loading import load_model as load_module
+    from motiondiff.model_files.loading import load_model as load_module
 
     module = load_module(REPO / "checkpoints" / "models" / "bandai_mini_text_cpu.safetensors")
     calls = []

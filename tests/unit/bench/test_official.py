@@ -20,8 +20,8 @@ from motiondiff.bench import official
 from motiondiff.bench.compare import comparison_markdown, comparison_table
 from motiondiff.bench.official_code import load_official
 from motiondiff.bench.workloads import TINY
-from motiondiff.errors import UsageError
-from motiondiff.hardware import cpu_flags
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.hardware import cpu_flags
 
 REPO = Path(__file__).resolve().parents[3]
 OWNED = ("model", "diffusion", "utils", "data_loaders", "clip")

@@ -41,7 +41,7 @@ def test_a_bad_callback_setting_is_one_user_error(tmp_path):
     itself, so the command prints one line."""
     from omegaconf import OmegaConf
 
-    from motiondiff.errors import UsageError
+    from motiondiff.runtime.errors import UsageError
 
     cfg = OmegaConf.create({"callbacks": {"evaluation": {
         "_target_": "motiondiff.eval.callbacks.GenerationEvaluation", "evaluator_dir": str(tmp_path),

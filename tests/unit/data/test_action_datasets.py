@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 from motiondiff.data.representations.hml_features import features_from_canonical
-from motiondiff.data.sources.errors import DatasetNotFoundError
 from motiondiff.data.sources.humanact12 import ACTION_NAMES, load_humanact12
 from motiondiff.data.sources.smpl_clips import place_points
 from motiondiff.data.sources.uestc import VIBE_TO_SMPL, load_uestc
-from motiondiff.safe_pickle import load_pickle
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
+from motiondiff.runtime.errors import DatasetNotFoundError
+from motiondiff.runtime.safe_pickle import load_pickle
 
 _spec = importlib.util.spec_from_file_location(
     "action_layouts", Path(__file__).parents[2] / "fixtures" / "action_layouts.py"

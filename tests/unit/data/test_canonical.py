@@ -20,7 +20,7 @@ from motiondiff.edit.canonical import (
     turn_points,
     yaw_matrix,
 )
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 PLACED = ("jp", *ROTATION_REPRESENTATIONS)
 TOL = 1e-5  # metres

@@ -10,7 +10,7 @@ from fixtures.synthetic_motion import rest_pose as _rest_pose
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.preparing.captions import CONTENT_PHRASES, STYLE_PHRASES, generate_captions, measure
 from motiondiff.data.preparing.splits import stratified_split, stratified_subset
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 
 @pytest.mark.parametrize(

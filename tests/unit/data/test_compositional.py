@@ -15,8 +15,8 @@ from motiondiff.data.compositional.join import Part, join_captions, join_parts, 
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
 from motiondiff.data.formats.prepared import SPLITS, load_split
 from motiondiff.data.representations.hml_features import mean_std
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.skeleton import SMPL22, SMPL22_BONE_LENGTHS
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.skeleton import SMPL22, SMPL22_BONE_LENGTHS
 from motiondiff.text.parse import parse_caption, parse_captions
 
 SRC = embedded_data_root()

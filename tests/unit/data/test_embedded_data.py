@@ -10,7 +10,7 @@ import torch
 
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
 from motiondiff.data.formats.prepared import load_split
-from motiondiff.data.sources.errors import DatasetNotFoundError
+from motiondiff.runtime.errors import DatasetNotFoundError
 
 ROOT = embedded_data_root()
 

@@ -13,8 +13,8 @@ from motiondiff.data.representations.hml_features import (
     features_from_joints,
     joints_from_features,
 )
-from motiondiff.rotations import qrot
-from motiondiff.skeleton import KIT21, SMPL22, SMPL22_BONE_LENGTHS
+from motiondiff.geometry.rotations import qrot
+from motiondiff.geometry.skeleton import KIT21, SMPL22, SMPL22_BONE_LENGTHS
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ from motiondiff.data.representations.hml_features import (
     features_from_canonical,
     joints_from_features,
 )
-from motiondiff.skeleton import KIT21, SMPL22
+from motiondiff.geometry.skeleton import KIT21, SMPL22
 
 REFLECT_X = np.array([-1.0, 1.0, 1.0])
 

@@ -12,8 +12,8 @@ import pytest
 import torch
 
 from motiondiff.data.official_datamodules import HumanML3DDataModule, KITDataModule
-from motiondiff.data.sources.errors import DatasetNotFoundError
 from motiondiff.data.sources.humanml3d import KIT, load_official_split, parse_caption_line, read_split_ids
+from motiondiff.runtime.errors import DatasetNotFoundError
 
 W1 = "a person walks forward and turns around.#a/DET person/NOUN walk/VERB forward/ADV and/CCONJ turn/VERB around/ADV"
 W2 = "someone strolls ahead, then spins.#someone/PRON stroll/VERB ahead/ADV then/ADV spin/VERB"

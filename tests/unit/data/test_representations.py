@@ -17,8 +17,8 @@ from motiondiff.data.representations import (
 )
 from motiondiff.data.representations import hml_features as F
 from motiondiff.data.representations.clip import ClipMotion
-from motiondiff.rotations import qrot
-from motiondiff.skeleton import KIT21, SMPL22
+from motiondiff.geometry.rotations import qrot
+from motiondiff.geometry.skeleton import KIT21, SMPL22
 
 RIG_REPS = ("jp", *ROTATION_REPRESENTATIONS)
 TOL = 1e-4  # metres

@@ -18,7 +18,7 @@ from motiondiff.data.formats.smpl_params import (
     read_smpl_params,
 )
 from motiondiff.export import export_smpl
-from motiondiff.skeleton import SMPL22, SMPL24
+from motiondiff.geometry.skeleton import SMPL22, SMPL24
 
 FRAMES = 12
 

@@ -23,8 +23,8 @@ from motiondiff.data.formats.up_axis import (
     rotation_to_y_up,
 )
 from motiondiff.export import export_bvh
-from motiondiff.rotations import axis_angle_to_quat, matrix_to_quat, qmul, qrot
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.rotations import axis_angle_to_quat, matrix_to_quat, qmul, qrot
+from motiondiff.geometry.skeleton import SMPL22
 
 HEAD, FEET = SMPL22.index("head"), [7, 8, 10, 11]
 TURNED = ("+y", "+z", "-z", "+x")  # the cases the acceptance names; the loop below runs every axis

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from motiondiff.demo.models import DemoModels, generate, parse_weights, released_choices
-from motiondiff.errors import UsageError
-from motiondiff.paths import SHIPPED_MODELS
+from motiondiff.model_files.resolve import SHIPPED_MODELS
+from motiondiff.runtime.errors import UsageError
 
 
 def test_released_models_are_offered_and_guidedmotion_only_with_a_checkpoint(tmp_path):

@@ -15,11 +15,10 @@ from motiondiff.edit.masks import (
     frame_keep,
     frames_from_fraction,
     frames_from_seconds,
-    part_keep,
     resolve_joints,
     to_frames,
 )
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 
 @pytest.fixture(scope="module")
@@ -68,14 +67,14 @@ def test_resolve_joints_presets_names_indices_and_errors():
 def test_hml263_lower_body_mask_keeps_trajectory_legs_and_contacts():
     rep = get_representation("hml263", SMPL22)
     sl = feature_slices(22)
-    keep = part_keep(rep, resolve_joints(SMPL22, "lower_body"))
+    keep = rep.part_keep(resolve_joints(SMPL22, "lower_body"))
     assert keep.shape == (263,) and keep[:4].all()  # root rotation/linear velocity and height
     assert keep[sl["contacts"]].all()  # the foot-contact channels belong to the feet
     ric = keep[sl["ric"]].reshape(21, 3)  # joints 1..21
     assert ric[[j - 1 for j in SMPL22.parts["legs"]]].all() and not ric[[j - 1 for j in SMPL22.parts["arms"]]].any()
     vel = keep[sl["local_vel"]].reshape(22, 3)
     assert vel[0].all() and not vel[SMPL22.index("head")].any()
-    upper = part_keep(rep, resolve_joints(SMPL22, "upper_body"))
+    upper = rep.part_keep(resolve_joints(SMPL22, "upper_body"))
     assert not upper[:4].any() and not (upper & keep).any() and (upper | keep).all()  # the two halves partition
 
 
@@ -84,14 +83,14 @@ def test_rig_masks_come_from_the_rig(rig):
     rep = get_representation("rp6jr", SMPL22, rig)
     joints = resolve_joints(rep.skeleton, "lower_body")
     assert [rep.skeleton.joint_names[j] for j in joints][:2] == ["Hips", "UpperLeg_L"]
-    keep = part_keep(rep, joints)
+    keep = rep.part_keep(joints)
     assert keep.shape == (rep.dim,) and keep[:9].all()  # root position (3) + root rotation (6)
     spine = rep.skeleton.index("Spine")
     assert not keep[3 + 6 * spine : 3 + 6 * (spine + 1)].any()
     assert keep.sum() == 3 + 6 * len(joints)
     jp = get_representation("jp", SMPL22, rig)
-    assert part_keep(jp, joints).sum() == 3 * len(joints)
-    hml = part_keep(get_representation("hml263", SMPL22), resolve_joints(SMPL22, "lower_body"))
+    assert jp.part_keep(joints).sum() == 3 * len(joints)
+    hml = get_representation("hml263", SMPL22).part_keep(resolve_joints(SMPL22, "lower_body"))
     assert hml.shape != keep.shape  # a mask belongs to one representation
 
 

@@ -13,7 +13,7 @@ from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import get_representation
 from motiondiff.edit import close_root_path, dataset_motions, inbetween, needs_root_closure
 from motiondiff.edit.trajectory import gaps
-from motiondiff.skeleton import SMPL22, get_skeleton
+from motiondiff.geometry.skeleton import SMPL22, get_skeleton
 
 register_resolvers()
 HML = get_representation("hml263", SMPL22)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from motiondiff.edit.foot_cleanup import clean_foot_skate, detect_contacts, foot_sliding
+from motiondiff.geometry.skeleton import SMPL22
 from motiondiff.pipelines import MotionPipeline
-from motiondiff.skeleton import SMPL22
 
 FPS = 20.0
 LEGS = sorted(SMPL22.part("legs"))

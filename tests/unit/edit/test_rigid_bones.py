@@ -11,8 +11,8 @@ from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
 from motiondiff.edit.rigid_bones import bone_length_range, rigid_bones
-from motiondiff.errors import UsageError
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
+from motiondiff.runtime.errors import UsageError
 
 FPS = 20.0
 

@@ -9,8 +9,8 @@ import pytest
 from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
-from motiondiff.eval.metrics import smoothness
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
+from motiondiff.metrics import smoothness
 
 
 def test_an_impulse_becomes_the_normalised_gaussian():

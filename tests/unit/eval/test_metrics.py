@@ -13,7 +13,7 @@ import torch
 import torch.distributed as dist
 import torch.multiprocessing as mp
 
-from motiondiff.eval.metrics import (
+from motiondiff.metrics import (
     FID,
     KID,
     ActionAccuracy,

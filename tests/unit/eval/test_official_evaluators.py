@@ -17,9 +17,9 @@ from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import feature_slices
 from motiondiff.data.representations.spec import representation_spec
 from motiondiff.eval import official
-from motiondiff.models.evaluators.networks import load_official_action_classifier
+from motiondiff.geometry.skeleton import SMPL22, SMPL24
+from motiondiff.model_files.evaluators import load_official_action_classifier
 from motiondiff.models.evaluators.stgcn import STGCNRecognition, load_official_uestc_recognition, spatial_adjacency
-from motiondiff.skeleton import SMPL22, SMPL24
 
 # y-up -> source axes for a "-y" source: 180 degrees about x, (x, y, z) -> (x, -y, -z)
 SOURCE_FROM_YUP_MINUS_Y = np.diag([1.0, -1.0, -1.0])

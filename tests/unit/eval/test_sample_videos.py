@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from motiondiff.errors import UsageError
 from motiondiff.eval.sample_videos import SampleVideos, add_gif, gif_summary, slug
+from motiondiff.runtime.errors import UsageError
 
 
 def animated_gif(frames: int = 3, size: tuple[int, int] = (24, 16)) -> bytes:

@@ -9,10 +9,10 @@ import subprocess
 import pytest
 from fixtures.synthetic_motion import glide
 
-from motiondiff.errors import UsageError
 from motiondiff.export.blender import BLENDER_FORMATS, blender_command, check_blender, convert_bvh
 from motiondiff.export.bvh_export import export_bvh
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
+from motiondiff.runtime.errors import UsageError
 
 REIMPORT = r"""
 import sys, bpy, addon_utils

@@ -17,9 +17,9 @@ from motiondiff.data.formats.bvh import BVHMotion, read_bvh
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import ROTATION_REPRESENTATIONS, get_representation
 from motiondiff.export import FORMATS, ExportReport, export_bvh, export_bvh_from_features, export_motion
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.rotations import qangle
-from motiondiff.skeleton import SMPL22, Skeleton
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.rotations import qangle
+from motiondiff.geometry.skeleton import SMPL22, Skeleton
 
 TOL = 1e-3  # metres: the acceptance criterion of the BVH round trip
 
@@ -227,7 +227,7 @@ def test_end_sites_have_anatomical_lengths_along_the_leaf_bone(val, tmp_path):
 
 def test_every_skeleton_gets_end_sites_of_real_length():
     from motiondiff.data.formats.bvh import continued_end_sites
-    from motiondiff.skeleton import KIT21, SMPL24
+    from motiondiff.geometry.skeleton import KIT21, SMPL24
 
     for skeleton in (SMPL22, KIT21, SMPL24):
         sites = skeleton.end_sites()

@@ -19,14 +19,14 @@ from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.representations import get_representation
 from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.edit.rigid_bones import bone_length_range
-from motiondiff.errors import UsageError
 from motiondiff.export import export_smpl, export_smpl_from_features, smpl_joints
 from motiondiff.export.outputs import export_features, parse_formats
 from motiondiff.export.smpl_export import SMPL_NEUTRAL_PELVIS, SmplLayoutError
-from motiondiff.kinematics import forward_kinematics
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.rotations import qangle
+from motiondiff.geometry.skeleton import KIT21, SMPL22, SMPL24
 from motiondiff.pipelines import MotionOutput, MotionPipeline
-from motiondiff.rotations import qangle
-from motiondiff.skeleton import KIT21, SMPL22, SMPL24
+from motiondiff.runtime.errors import UsageError
 
 TOL = 0.02  # metres: the acceptance criterion (max over frames and joints)
 KEYS = {"poses", "trans", "mocap_framerate", "gender", "betas", "global_orient", "body_pose", "transl",
@@ -46,7 +46,7 @@ def load(path) -> dict:
 def smpl_model_fk(data: dict) -> np.ndarray:
     """Joints (F, 24, 3) as the SMPL model poses its skeleton: each joint's 4x4 transform is its parent's times
     [Rodrigues(pose_j) | J_j - J_parent], the root's [R_0 | J_0]; posed joints are the transforms' translations plus
-    `trans`. Independent of motiondiff.kinematics (matrices, absolute rest joints, no quaternions)."""
+    `trans`. Independent of motiondiff.geometry.kinematics (matrices, absolute rest joints, no quaternions)."""
     poses, rest, parents = data["poses"], data["rest_joints"], data["parents"]
     frames = len(poses)
     rot = Rotation.from_rotvec(poses.reshape(-1, 3)).as_matrix().reshape(frames, 24, 3, 3)

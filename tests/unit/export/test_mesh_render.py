@@ -17,14 +17,14 @@ from motiondiff.data.datamodules import embedded_data_root
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.formats.smpl_params import SmplBody, load_smpl_body
 from motiondiff.data.representations import get_representation
-from motiondiff.errors import UsageError
 from motiondiff.export import smpl_joints
 from motiondiff.export.mesh_render import render_mesh
 from motiondiff.export.outputs import check_formats_for
 from motiondiff.export.smpl_export import smpl_parameters
 from motiondiff.export.smpl_mesh import render_body, smpl_vertices
+from motiondiff.geometry.skeleton import KIT21, SMPL22, SMPL24
 from motiondiff.pipelines import MotionOutput
-from motiondiff.skeleton import KIT21, SMPL22, SMPL24
+from motiondiff.runtime.errors import UsageError
 
 FPS = 20.0
 

@@ -19,7 +19,7 @@ from motiondiff.export.render import (
     stick_figure_animation,
     title_at,
 )
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 matplotlib.use("Agg")
 LIMB_COLOURS = ((0x1F, 0x77, 0xB4), (0xD6, 0x27, 0x28), (0x33, 0x33, 0x33))

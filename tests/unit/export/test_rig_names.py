@@ -8,10 +8,10 @@ import pytest
 from fixtures.synthetic_motion import glide
 
 from motiondiff.data.formats.bvh import read_bvh
-from motiondiff.errors import UsageError
 from motiondiff.export.bvh_export import export_bvh
 from motiondiff.export.rig_names import rig_presets, with_rig_names
-from motiondiff.skeleton import KIT21, SMPL22
+from motiondiff.geometry.skeleton import KIT21, SMPL22
+from motiondiff.runtime.errors import UsageError
 
 
 @pytest.mark.parametrize("preset, pelvis, left_wrist", [("smpl", "Pelvis", "L_Wrist"),

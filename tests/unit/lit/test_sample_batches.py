@@ -8,8 +8,8 @@ import pytest
 import torch
 from fixtures.tiny_models import tiny_datamodule, tiny_module
 
-from motiondiff.errors import UsageError
 from motiondiff.lit.generation import MAX_NUM_SAMPLES, SAMPLE_BATCH, check_num_samples, generate_features
+from motiondiff.runtime.errors import UsageError
 
 
 @pytest.fixture(scope="module")

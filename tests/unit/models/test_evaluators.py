@@ -10,16 +10,14 @@ import pytest
 import torch
 from fixtures.official_layouts import layout_shapes, write_glove
 
-from motiondiff.errors import UsageError
-from motiondiff.models.evaluators.networks import (
-    ActionClassifierGRU,
-    TextMotionEvaluator,
-    classifier_input,
+from motiondiff.model_files.evaluators import (
     load_official_action_classifier,
     load_official_t2m_evaluator,
     load_released,
     save_released,
 )
+from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, classifier_input
+from motiondiff.runtime.errors import UsageError
 from motiondiff.text.word_vectors import POS_INDEX, Vocabulary, load_glove, pos_category, sequence, tag_caption
 
 
@@ -159,12 +157,12 @@ def test_classifier_input_is_relative_to_the_first_root_on_the_ground():
 
 def test_pose_and_trajectory_holds_the_world_joints():
     from motiondiff.data.representations.hml_features import features_from_joints, joints_from_features, recover_root
+    from motiondiff.geometry.rotations import qinv, qrot
     from motiondiff.models.evaluators.networks import pose_and_trajectory
-    from motiondiff.rotations import qinv, qrot
 
     t = np.linspace(0, 2, 41)[:, None]
     rng = np.random.default_rng(0)
-    from motiondiff.skeleton import SMPL22
+    from motiondiff.geometry.skeleton import SMPL22
 
     rest = np.cumsum(rng.normal(0, 0.1, (22, 3)), axis=0) + [0, 1.0, 0]
     joints = (
@@ -184,7 +182,7 @@ def test_pose_and_trajectory_holds_the_world_joints():
 
 def test_mirroring_swaps_sides_of_joints_and_labels():
     from motiondiff.data.mirror import mirrored_labels
-    from motiondiff.skeleton import KIT21, SMPL22
+    from motiondiff.geometry.skeleton import KIT21, SMPL22
 
     for skel in (SMPL22, KIT21):
         perm = skel.mirror_permutation

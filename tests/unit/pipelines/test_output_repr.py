@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from motiondiff.data.representations import get_representation
+from motiondiff.geometry.skeleton import SMPL22
 from motiondiff.pipelines.output import MotionOutput
-from motiondiff.skeleton import SMPL22
 
 
 def test_repr_is_one_short_line_without_arrays():

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from motiondiff.data.formats.bvh import read_bvh
-from motiondiff.errors import UsageError
 from motiondiff.pipelines import MotionOutput, MotionPipeline
+from motiondiff.runtime.errors import UsageError
 
 CLIP = "test:dataset-1_walk_active_001"
 

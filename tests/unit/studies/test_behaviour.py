@@ -64,8 +64,8 @@ def test_an_action_model_is_asked_with_the_prompts_labels():
     the rows are the labels the model knows."""
     import torch
 
-    from motiondiff.cli.common import SHIPPED_MODELS
-    from motiondiff.release import load_release
+    from motiondiff.model_files.release import load_release
+    from motiondiff.model_files.resolve import SHIPPED_MODELS
     from motiondiff.studies.behaviour import DEFAULT_PROMPTS, report
 
     module = load_release(SHIPPED_MODELS["action"])
@@ -90,9 +90,9 @@ def test_net_speed_is_ground_distance_per_second_and_ignores_jitter():
 def test_the_speed_table_measures_each_length_against_the_real_clips():
     import torch
 
-    from motiondiff.cli.common import SHIPPED_MODELS
+    from motiondiff.model_files.release import load_release
+    from motiondiff.model_files.resolve import SHIPPED_MODELS
     from motiondiff.pipelines import MotionPipeline
-    from motiondiff.release import load_release
     from motiondiff.studies.behaviour import SPEED_PROMPTS, speed_table
 
     torch.manual_seed(0)

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 from omegaconf import OmegaConf
 
-from motiondiff.errors import UsageError
-from motiondiff.paths import CONF_DIR
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import CONF_DIR
 from motiondiff.studies.config import study_config
 
 STUDIES_DIR = Path(__file__).resolve().parents[3] / "src" / "motiondiff" / "studies"

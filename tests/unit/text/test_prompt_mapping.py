@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import torch
 
-from motiondiff.errors import UsageError
 from motiondiff.lit.conditions import condition_batch
 from motiondiff.pipelines.coverage import load_prompt_mapping
+from motiondiff.runtime.errors import UsageError
 from motiondiff.text.coverage import PromptCoverage
 from motiondiff.text.prompt_mapping import PromptMapping
 

@@ -25,7 +25,6 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
 from motiondiff.data.compositional.join import Part, join_captions, join_parts, place_canonically
 from motiondiff.data.compositional.report import readme, seam_measures, split_report, summary
 from motiondiff.data.formats.prepared import SPLITS, PreparedSplit, fill_derived, load_split, save_split
@@ -34,6 +33,7 @@ from motiondiff.data.preparing.processing import most_active_window
 from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import PrepareError, check_output
 from motiondiff.data.representations.hml_features import canonicalize_joints, mean_std
+from motiondiff.runtime.atomic import atomic_write
 
 COMPLEX_MIN_ACTIONS = 3  # GuidedMotion's complex-motion subset: >= 3 local actions ...
 COMPLEX_MIN_FRAMES = 150  # ... and >= 150 frames
@@ -310,7 +310,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         return 2
     counts = {"train": int(args.get("train", 64)), "val": int(args.get("val", 16)), "test": int(args.get("test", 64))}
-    from motiondiff.paths import REPO_DIR as repo
+    from motiondiff.runtime.paths import REPO_DIR as repo
 
     try:
         report = build(args.get("src", repo / "data" / "bandai_mini"), args["out"], counts, int(args.get("seed", 0)),

@@ -23,9 +23,9 @@ from scipy.ndimage import gaussian_filter1d
 
 from motiondiff.data.preparing.captions import SUBJECTS
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.rotations import qmul, qrot, qslerp
-from motiondiff.skeleton import SMPL22, Skeleton
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.rotations import qmul, qrot, qslerp
+from motiondiff.geometry.skeleton import SMPL22, Skeleton
 
 # Heading smoothing (frames at 20 fps): a walker's torso twists about 10 degrees each step; aligning the next clip
 # to one twisted frame would send it off at that angle. Outside transitions the choice does not matter (exact).

@@ -7,7 +7,7 @@ from collections import Counter
 import numpy as np
 
 from motiondiff.data.formats.prepared import SPLITS, PreparedSplit
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 FEET = [j for side in SMPL22.foot_joints for j in side]
 STANDING_FOOT_SPEED = 0.25  # m/s: below this, in both clips next to a seam, the feet are planted there

@@ -23,10 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
 from motiondiff.data.formats.bvh_parse import VALID_CHANNELS, BVHError, RawBVH, channel_kind, parse_text
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.rotations import (
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.rotations import (
     euler_to_matrix,
     matrix_to_euler,
     matrix_to_quat,
@@ -36,7 +35,8 @@ from motiondiff.rotations import (
     qslerp,
     quat_to_matrix,
 )
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.atomic import atomic_write
 
 __all__ = [
     "BVHError",

@@ -25,7 +25,7 @@ import re
 
 import numpy as np
 
-from motiondiff.skeleton import SMPL22_NAMES, _tokens
+from motiondiff.geometry.skeleton import SMPL22_NAMES, _tokens
 
 LIMB_ALIASES = {
     "hip": ("upleg", "upperleg", "thigh", "femur", "hip"),

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.skeleton import get_skeleton
+from motiondiff.geometry.skeleton import get_skeleton
 
 
 @dataclass(frozen=True)

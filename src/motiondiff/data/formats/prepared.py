@@ -26,13 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-from motiondiff.atomic import atomic_write
 from motiondiff.data.datasets import MotionRecord
 from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import features_from_canonical
-from motiondiff.data.sources.errors import DatasetNotFoundError
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.atomic import atomic_write
+from motiondiff.runtime.errors import DatasetNotFoundError
 
 SPLITS = ("train", "val", "test")
 DERIVED = ("features", "native_positions")

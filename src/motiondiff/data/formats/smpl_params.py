@@ -24,9 +24,9 @@ import numpy as np
 
 from motiondiff.data.formats.array_bounds import check_array_file
 from motiondiff.data.formats.bvh import BVHMotion, motion_from_arrays
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.rotations import quat_to_matrix, rotvec_to_quat
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.rotations import quat_to_matrix, rotvec_to_quat
+from motiondiff.geometry.skeleton import SMPL22
 
 BODY_JOINTS = 22
 POSE_KEYS = (("poses",), ("global_orient", "body_pose"), ("root_orient", "pose_body"))

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motiondiff.data.preparing.caption_wording import varied_captions
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
 
 GENERATED_NOTE = "generated from labels and measured motion; not human-written"
 

@@ -34,7 +34,6 @@ import re
 from dataclasses import dataclass, replace
 from pathlib import Path, PurePosixPath
 
-from motiondiff.atomic import atomic_write
 from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.bvh import BVHError, parse_bvh
 from motiondiff.data.formats.joint_map import JointMap
@@ -42,6 +41,7 @@ from motiondiff.data.formats.up_axis import parse_up_axis
 from motiondiff.data.preparing.captions import GENERATED_NOTE
 from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import PrepareError, check_output, copy_license, process_and_write
+from motiondiff.runtime.atomic import atomic_write
 
 COLUMNS = ("file", "action", "style", "caption")
 UNLABELLED = "unlabelled"

@@ -11,9 +11,9 @@ from motiondiff.data.formats.bvh_parse import MAX_FRAME_JOINTS
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.preparing.captions import MotionFacts, measure
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.rotations import qmul, qrot
-from motiondiff.skeleton import SMPL22, Skeleton
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.rotations import qmul, qrot
+from motiondiff.geometry.skeleton import SMPL22, Skeleton
 
 TARGET_FPS = 20.0
 MIN_FRAMES = 2  # features need two frames; datasets apply their own, larger minimum when loading

@@ -19,7 +19,7 @@ import re
 import shutil
 from pathlib import Path
 
-from motiondiff.processes import alive
+from motiondiff.runtime.processes import alive
 
 _AT_FDCWD, _RENAME_EXCHANGE = -100, 2
 _TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<kind>building|replaced)-(?P<pid>\d+)$")

@@ -19,7 +19,6 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from motiondiff.atomic import atomic_write
 from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.bvh import BVHError, parse_bvh
 from motiondiff.data.formats.joint_map import JointMap
@@ -36,6 +35,7 @@ from motiondiff.data.preparing.processing import (
 from motiondiff.data.preparing.splits import rare_to_train, stratified_split, stratified_subset
 from motiondiff.data.representations.hml_features import mean_std
 from motiondiff.data.sources import bandai
+from motiondiff.runtime.atomic import atomic_write
 
 
 class PrepareError(ValueError):

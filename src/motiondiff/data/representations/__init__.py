@@ -6,8 +6,8 @@ from __future__ import annotations
 from motiondiff.data.representations.base import Representation
 from motiondiff.data.representations.hml import HMLRepresentation
 from motiondiff.data.representations.rig import EULER_ORDER, JointPositions, RotationRepresentation
-from motiondiff.data.sources.errors import RepresentationError
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.runtime.errors import RepresentationError
 
 REPRESENTATIONS = ("hml263", "kit251", "jp", "rp6jr", "rpqjr", "rpajr", "rpejr", "rpmjr")
 ROTATION_REPRESENTATIONS = ("rp6jr", "rpqjr", "rpajr", "rpejr", "rpmjr")

@@ -11,7 +11,7 @@ import torch
 
 from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import FOOT_CONTACT_THRESHOLD
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
 
 STD_FLOOR = 1e-8  # a per-dim std below this (constant dim, e.g. a joint that never moves) is replaced by 1
 
@@ -49,6 +49,15 @@ class Representation(ABC):
     @abstractmethod
     def joint_dims(self) -> list[list[int]]:
         """Per joint of `skeleton`, the feature dims that describe it (the root's list holds the trajectory dims)."""
+
+    def part_keep(self, joints) -> np.ndarray:
+        """(D,) bool over the feature dims: True on every dim of the given joints (the root's include the
+        trajectory: its velocities or position and, for HumanML3D, its height)."""
+        dims = self.joint_dims()
+        keep = np.zeros(self.dim, dtype=bool)
+        for j in joints:
+            keep[dims[j]] = True
+        return keep
 
     # ---- shared helpers ---------------------------------------------------------------------------------------
     def _check_features(self, features: torch.Tensor) -> torch.Tensor:

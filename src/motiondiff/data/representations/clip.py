@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.skeleton import Skeleton
 
 
 @dataclass

@@ -13,8 +13,8 @@ import torch
 from motiondiff.data.representations.base import Representation, contact_joints_of
 from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import feature_dim, feature_slices, features_from_canonical, mean_std
-from motiondiff.skeleton import Skeleton
-from motiondiff.torch_rotations import qinv, qrot
+from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.geometry.torch_rotations import qinv, qrot
 
 
 def recover_root_torch(features: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:

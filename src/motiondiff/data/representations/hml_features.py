@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from motiondiff.rotations import matrix_to_6d, qbetween, qinv, qmul, qnormalize, qrot, quat_to_matrix
-from motiondiff.skeleton import KIT21, SMPL22, Skeleton
+from motiondiff.geometry.rotations import matrix_to_6d, qbetween, qinv, qmul, qnormalize, qrot, quat_to_matrix
+from motiondiff.geometry.skeleton import KIT21, SMPL22, Skeleton
 
 UP = np.array([0.0, 1.0, 0.0])
 FORWARD = np.array([0.0, 0.0, 1.0])
@@ -155,7 +155,7 @@ def ground_and_face(positions: np.ndarray, skeleton: Skeleton) -> tuple[np.ndarr
 
 
 def _default_lengths(skeleton: Skeleton) -> np.ndarray | None:
-    from motiondiff.skeleton import SMPL22_BONE_LENGTHS
+    from motiondiff.geometry.skeleton import SMPL22_BONE_LENGTHS
 
     return SMPL22_BONE_LENGTHS if skeleton.name == "smpl22" else None
 

@@ -17,12 +17,12 @@ import numpy as np
 import torch
 from scipy.spatial.transform import Rotation
 
-from motiondiff import torch_rotations as tr
 from motiondiff.data.representations.base import Representation, contact_joints_of
 from motiondiff.data.representations.clip import ClipMotion
-from motiondiff.kinematics import forward_kinematics_torch
-from motiondiff.rotations import matrix_to_6d, matrix_to_euler, qfix, qnormalize, quat_to_matrix
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry import torch_rotations as tr
+from motiondiff.geometry.kinematics import forward_kinematics_torch
+from motiondiff.geometry.rotations import matrix_to_6d, matrix_to_euler, qfix, qnormalize, quat_to_matrix
+from motiondiff.geometry.skeleton import Skeleton
 
 # Intrinsic X-Y-Z. Each Tait-Bryan order locks when its MIDDLE angle reaches +-90 degrees. The Bandai rig's joint
 # frames are not aligned with the world (bones run along local x), so several joints rest near a 90-degree turn

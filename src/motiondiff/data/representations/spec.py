@@ -16,7 +16,7 @@ import numpy as np
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.representations import Representation, get_representation
 from motiondiff.data.representations.hml_features import canonicalize_joints, features_from_canonical
-from motiondiff.skeleton import SKELETONS, Skeleton, get_skeleton
+from motiondiff.geometry.skeleton import SKELETONS, Skeleton, get_skeleton
 
 
 def representation_spec(rep: Representation, feature_skeleton: Skeleton, joint_map: JointMap | None = None) -> dict:

@@ -23,7 +23,6 @@ import numpy as np
 
 from motiondiff.data.preparing.splits import stratified_subset
 from motiondiff.data.representations.clip import ClipSplit, LabelledClip
-from motiondiff.data.sources.errors import DatasetNotFoundError
 from motiondiff.data.sources.smpl_clips import (
     NECK,
     PELVIS,
@@ -33,8 +32,9 @@ from motiondiff.data.sources.smpl_clips import (
     placed_motion,
     smpl_sequence,
 )
-from motiondiff.safe_pickle import load_pickle
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
+from motiondiff.runtime.errors import DatasetNotFoundError
+from motiondiff.runtime.safe_pickle import load_pickle
 
 log = logging.getLogger(__name__)
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.data.datasets import MotionRecord
-from motiondiff.data.sources.errors import DatasetNotFoundError
+from motiondiff.runtime.errors import DatasetNotFoundError
 
 log = logging.getLogger(__name__)
 

@@ -20,9 +20,9 @@ from scipy.spatial.transform import Rotation
 
 from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face
-from motiondiff.kinematics import forward_kinematics
-from motiondiff.rotations import qmul, qrot, quat_to_matrix
-from motiondiff.skeleton import SMPL22, SMPL24
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.rotations import qmul, qrot, quat_to_matrix
+from motiondiff.geometry.skeleton import SMPL22, SMPL24
 
 PELVIS, NECK = 0, 12
 # Rotation taking each possible source up axis to +y (proper rotations: left and right are never swapped).

@@ -29,10 +29,10 @@ import numpy as np
 
 from motiondiff.data.preparing.splits import stratified_subset
 from motiondiff.data.representations.clip import ClipSplit, LabelledClip
-from motiondiff.data.sources.errors import DatasetNotFoundError
 from motiondiff.data.sources.smpl_clips import action_caption, detect_up_axis, mean_rig, placed_motion, smpl_sequence
-from motiondiff.safe_pickle import load_pickle
-from motiondiff.skeleton import SMPL22
+from motiondiff.geometry.skeleton import SMPL22
+from motiondiff.runtime.errors import DatasetNotFoundError
+from motiondiff.runtime.safe_pickle import load_pickle
 
 log = logging.getLogger(__name__)
 

@@ -4,31 +4,24 @@
   convolutional movement encoder (features without foot contacts, length / 4), a BiGRU motion encoder and a BiGRU
   text encoder over word vectors + POS one-hots, trained contrastively so matching captions and motions are close
   in Euclidean distance. Module and parameter names match the official `text_mot_match/model/finest.tar`, so it
-  loads strictly (`load_official_t2m_evaluator`).
+  loads strictly (`model_files.evaluators.load_official_t2m_evaluator`).
 - Action recognition (Guo et al. 2020, HumanAct12 protocol): a 2-layer GRU over flattened joint positions; the
   output at the last valid frame goes through `linear1` + tanh (the 30-d features for FID/diversity) and `linear2`
-  (the class logits). `load_official_action_classifier` reads the official HumanAct12 checkpoint.
+  (the class logits). `model_files.evaluators.load_official_action_classifier` reads the official HumanAct12 checkpoint.
 
 Evaluators trained on our own datasets (`python -m motiondiff.cli.train_evaluator`) have the same architectures
-(sizes configurable) and are released as safetensors + JSON config (`save_released` / `load_released`).
+(sizes configurable) and are released as safetensors + JSON config (`model_files.evaluators`).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import torch
-from safetensors.torch import load_file, save_file
 from torch import nn
 from torch.nn.utils.rnn import pack_padded_sequence
 
-from motiondiff.atomic import atomic_write, write_json
-from motiondiff.checked_loading import check_finite_state, reading, torch_load
 from motiondiff.data.representations.hml_features import feature_slices, joints_from_features, recover_root
-from motiondiff.errors import UsageError
-from motiondiff.release_checks import check_weights_checksum, read_release_json, sha256_of
-from motiondiff.text.word_vectors import POS_CATEGORIES, Vocabulary, load_glove, sequence, tag_captions
+from motiondiff.text.word_vectors import POS_CATEGORIES, Vocabulary, sequence, tag_captions
 
 FOOT_CONTACT_DIMS = 4
 OFFICIAL_MAX_FRAMES = 196  # the official loader's max_motion_length
@@ -185,28 +178,6 @@ class TextMotionEvaluator(nn.Module):
         return self.text_encoder(self.word_vectors(ids.to(device)), pos.to(device), lengths)
 
 
-def load_official_t2m_evaluator(
-    checkpoint: str | Path, glove_dir: str | Path, mean, std, dataset: str = "t2m"
-) -> TextMotionEvaluator:
-    """The official evaluator: `<dataset>/text_mot_match/model/finest.tar`, the `glove/` folder, and the evaluator's
-    Mean/Std (paths of `<dataset>/Comp_v6_KLD01/meta/{mean,std}.npy`, or arrays). dataset: "t2m" (HumanML3D, 263)
-    or "kit" (251)."""
-    dims = {"t2m": 263, "kit": 251}
-    if dataset not in dims:
-        raise ValueError(f"dataset={dataset!r}: the official evaluators exist for 't2m' (HumanML3D) and 'kit'")
-    vocab, vectors = load_glove(glove_dir)
-    model = TextMotionEvaluator(dims[dataset], vocab.words, word_dim=vectors.shape[1], learned_words=False)
-    model.word_vectors.weight.data.copy_(torch.from_numpy(vectors))
-    state = torch_load(checkpoint, "official evaluator", "give the official text_mot_match/model/finest.tar")
-    for name in ("movement_encoder", "text_encoder", "motion_encoder"):
-        if name not in state:
-            raise KeyError(f"{checkpoint} has no {name!r}: is it the text_mot_match finest.tar?")
-        getattr(model, name).load_state_dict(state[name], strict=True)
-    model.pad_to = OFFICIAL_MAX_FRAMES
-    model.set_normalisation(*(np.load(s) if isinstance(s, (str, Path)) else s for s in (mean, std)))
-    return model.eval()
-
-
 # ---- action recognition ------------------------------------------------------------------------------------------
 class ActionClassifierGRU(nn.Module):
     """HumanAct12 protocol classifier: motion (B, J, 3, T), lengths (B,) -> (logits (B, C), features (B, 30)).
@@ -234,21 +205,6 @@ class ActionClassifierGRU(nn.Module):
         last = out[lengths.to(out.device).long() - 1, torch.arange(b, device=out.device)]
         features = torch.tanh(self.linear1(last))
         return self.linear2(features), features
-
-
-def load_official_action_classifier(path: str | Path) -> ActionClassifierGRU:
-    """The official HumanAct12 classifier (`action_recognition_model_humanact12.tar`; keys model/optimizer/...)."""
-    state = torch_load(path, "official action classifier", "give action_recognition_model_humanact12.tar")
-    weights = state.get("model", state)
-    model = ActionClassifierGRU(
-        input_size=weights["recurrent.weight_ih_l0"].shape[1],
-        hidden_size=weights["recurrent.weight_hh_l0"].shape[1],
-        num_layers=sum(k.startswith("recurrent.weight_ih_l") for k in weights),
-        num_classes=weights["linear2.weight"].shape[0],
-        feature_size=weights["linear1.weight"].shape[0],
-    )
-    model.load_state_dict(weights, strict=True)
-    return model.eval()
 
 
 INPUT_KINDS = ("joints", "pose_trajectory")
@@ -281,52 +237,3 @@ def motion_input(classifier: ActionClassifierGRU, features: torch.Tensor, num_jo
     else:
         joints = joints_from_features(x, num_joints)
     return classifier_input(torch.from_numpy(joints)).to(features.device)
-
-
-# ---- released evaluators: safetensors + JSON config -------------------------------------------------------------
-_KINDS = {"text_motion": TextMotionEvaluator, "action": ActionClassifierGRU}
-EVALUATOR_FIX = "restore the shipped evaluators (`git checkout -- checkpoints`) or rebuild them with `python -m motiondiff.cli.train_evaluator`"
-
-
-def save_released(model: nn.Module, path: str | Path, meta: dict | None = None) -> Path:
-    """`<path>.safetensors` (weights) and `<path>.json` (kind, constructor config, vocabulary, provenance, and the
-    weights' SHA-256, checked on load)."""
-    path = Path(path)
-    kind = next(k for k, cls in _KINDS.items() if isinstance(model, cls))
-    config = dict(model.config)
-    if isinstance(model, TextMotionEvaluator):
-        config["words"] = model.words
-    state = {k: v.detach().contiguous().cpu() for k, v in model.state_dict().items()}
-    atomic_write(path.with_suffix(".safetensors"), lambda tmp: save_file(state, tmp))
-    doc = {
-        "kind": kind,
-        "config": config,
-        "meta": meta or {},
-        "weights_sha256": sha256_of(path.with_suffix(".safetensors")),
-    }
-    write_json(path.with_suffix(".json"), doc)
-    return path.with_suffix(".safetensors")
-
-
-def load_released(path: str | Path) -> tuple[nn.Module, dict]:
-    """A released evaluator (no pickle anywhere) -> (model in eval mode, meta). A file that is not one, was changed
-    after release (its weights_sha256) or holds NaN weights is one UsageError: its scores would be meaningless."""
-    path = Path(path)
-    weights, config_file = path.with_suffix(".safetensors"), path.with_suffix(".json")
-    for p in (weights, config_file):
-        if not p.is_file():
-            raise FileNotFoundError(f"{p} not found: {EVALUATOR_FIX}")
-    doc = read_release_json(config_file)
-    if doc.get("kind") not in _KINDS or not isinstance(doc.get("config"), dict):
-        raise UsageError(f"evaluator config {config_file} is not a released evaluator (kind {doc.get('kind')!r}, one "
-                         f"of {', '.join(_KINDS)}, and a config object); {EVALUATOR_FIX}")  # fmt: skip
-    if not isinstance(doc.get("weights_sha256"), str):
-        raise UsageError(f"evaluator config {config_file} records no weights_sha256 (released before checksums); "
-                         f"{EVALUATOR_FIX}")  # fmt: skip
-    check_weights_checksum(weights, config_file, doc["weights_sha256"], EVALUATOR_FIX)
-    with reading(weights, "evaluator weights", EVALUATOR_FIX):
-        state = load_file(weights)
-        check_finite_state(state, f"evaluator weights {weights}", EVALUATOR_FIX)
-        model = _KINDS[doc["kind"]](**doc["config"])
-        model.load_state_dict(state, strict=True)
-    return model.eval(), doc.get("meta", {})

@@ -20,8 +20,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from motiondiff.checked_loading import torch_load
-from motiondiff.skeleton import SMPL24
+from motiondiff.geometry.skeleton import SMPL24
+from motiondiff.runtime.checked_loading import torch_load
 
 TEMPORAL_KERNEL = 9
 BLOCKS = ((64, 1, False), (64, 1, True), (64, 1, True), (64, 1, True), (128, 2, True), (128, 1, True),

@@ -8,7 +8,7 @@ from torch import Tensor
 from torchmetrics import Metric
 from torchmetrics.classification import MulticlassAccuracy
 
-from motiondiff.eval.metrics._base import (
+from motiondiff.metrics._base import (
     _check_features,
     _f64,
     _gathered,

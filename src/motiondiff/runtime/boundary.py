@@ -20,10 +20,9 @@ import sys
 import time
 from pathlib import Path
 
-from motiondiff.atomic import TEMP_GLOB
-from motiondiff.data.sources.errors import DatasetNotFoundError, RepresentationError
-from motiondiff.errors import UsageError
-from motiondiff.processes import alive
+from motiondiff.runtime.atomic import TEMP_GLOB
+from motiondiff.runtime.errors import DatasetNotFoundError, RepresentationError, UsageError
+from motiondiff.runtime.processes import alive
 
 USER_ERRORS = (UsageError, DatasetNotFoundError, RepresentationError)  # raised with a message that names the fix
 LOCK_NAME = ".motiondiff.lock"

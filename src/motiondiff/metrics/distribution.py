@@ -10,7 +10,7 @@ import scipy.linalg
 import torch
 from torch import Tensor
 
-from motiondiff.eval.metrics._base import (
+from motiondiff.metrics._base import (
     _CHUNK,
     _cdist,
     _f64,

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motiondiff.skeleton import Skeleton
+from motiondiff.geometry.skeleton import Skeleton
 
 
 def check_motion(

@@ -34,7 +34,7 @@ Unconstrained (MoDi, Raab et al. 2023; vvMDM; MDM table 4): FID, KID, improved p
 Every metric is computed over several replications and reported as mean ± 95% CI (`motiondiff.eval.report`).
 """
 
-from motiondiff.eval.metrics.distribution import (
+from motiondiff.metrics.distribution import (
     FID,
     KID,
     PrecisionRecall,
@@ -45,7 +45,7 @@ from motiondiff.eval.metrics.distribution import (
     mmd2_unbiased,
     polynomial_kernel,
 )
-from motiondiff.eval.metrics.spread import (
+from motiondiff.metrics.spread import (
     ActionAccuracy,
     Diversity,
     MultiModality,
@@ -54,7 +54,7 @@ from motiondiff.eval.metrics.spread import (
     multimodality,
     smoothness,
 )
-from motiondiff.eval.metrics.text_motion import MMDist, RPrecision, mm_dist, r_precision, r_precision_counts
+from motiondiff.metrics.text_motion import MMDist, RPrecision, mm_dist, r_precision, r_precision_counts
 
 __all__ = ["FID", "KID", "PrecisionRecall", "frechet_distance", "gaussian_statistics", "kid", "knn_precision_recall",
            "mmd2_unbiased", "polynomial_kernel", "ActionAccuracy", "Diversity", "MultiModality", "Smoothness",

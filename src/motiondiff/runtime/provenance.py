@@ -13,9 +13,9 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.atomic import finite_or_null, write_json
+from motiondiff.runtime.atomic import finite_or_null, write_json
 
-REPO_DIR = Path(__file__).resolve().parents[2]
+REPO_DIR = Path(__file__).resolve().parents[3]  # the checkout (this file is src/motiondiff/runtime/provenance.py)
 PACKAGES = ("motiondiff", "torch", "lightning", "hydra-core", "omegaconf", "torchmetrics", "wandb",
             "sentence-transformers", "transformers", "spacy", "numpy", "scipy", "safetensors")  # fmt: skip
 

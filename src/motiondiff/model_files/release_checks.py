@@ -14,8 +14,8 @@ import math
 import re
 from pathlib import Path
 
-from motiondiff.errors import UsageError
-from motiondiff.paths import RELEASE_SUFFIXES
+from motiondiff.model_files.resolve import RELEASE_SUFFIXES
+from motiondiff.runtime.errors import UsageError
 
 FORMAT = "motiondiff-release-1"
 MODEL_CLASS = "MotionDiffusionModule"  # the class a release names (loaded as lit.motion_diffusion.MotionDiffusion)
@@ -49,7 +49,7 @@ def check_release_files(path: str | Path) -> dict:
     check_weights_checksum(weights, config, meta["weights_sha256"])
     from safetensors import safe_open  # numpy views: no torch
 
-    from motiondiff.checked_loading import reading
+    from motiondiff.runtime.checked_loading import reading
 
     with reading(weights, "release weights", RESTORE):
         with safe_open(str(weights), framework="numpy") as f:
@@ -113,7 +113,7 @@ def check_release_meta(meta: dict, config: Path, hparams: bool = True) -> None:
     where = f"release config {config}"
     if meta.get("format") != FORMAT:
         raise UsageError(f"{where} is not a motiondiff release (format {_shown(meta.get('format'))}, expected "
-                         f"{FORMAT}): give the .safetensors of a release made by motiondiff.release")  # fmt: skip
+                         f"{FORMAT}): give the .safetensors of a release made by motiondiff.model_files.release")  # fmt: skip
     unknown = sorted(set(meta) - TOP_KEYS)
     missing = sorted(TOP_KEYS - set(meta))
     if unknown or missing:

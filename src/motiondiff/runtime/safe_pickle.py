@@ -11,7 +11,7 @@ import pickle
 from collections.abc import Collection
 from pathlib import Path
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 # What numpy arrays, dtypes and numpy scalars pickle to (numpy 1.x wrote `numpy.core`, numpy 2 writes `numpy._core`).
 # These only rebuild arrays from bytes; object arrays' items go through the same restricted unpickler.

@@ -14,10 +14,7 @@ from pathlib import Path
 import torch
 from safetensors.torch import load_file, save_file
 
-from motiondiff.atomic import atomic_write
-from motiondiff.checked_loading import check_finite_state, check_same_shapes, reading
-from motiondiff.errors import UsageError
-from motiondiff.release_checks import (
+from motiondiff.model_files.release_checks import (
     FORMAT,
     LATENT_CLASS,
     MODEL_CLASS,
@@ -28,6 +25,9 @@ from motiondiff.release_checks import (
     release_paths,
     sha256_of,
 )
+from motiondiff.runtime.atomic import atomic_write
+from motiondiff.runtime.checked_loading import check_finite_state, check_same_shapes, reading
+from motiondiff.runtime.errors import UsageError
 
 
 def save_release(module, path: str | Path, provenance: dict | None = None) -> tuple[Path, Path]:
@@ -120,7 +120,7 @@ def cpu_description() -> str:
     """'<cores>-core <model name> (<fast instruction set>)' of this machine, for a model card."""
     import os
 
-    from motiondiff.hardware import cpu_has_fast_bf16, cpu_model
+    from motiondiff.runtime.hardware import cpu_has_fast_bf16, cpu_model
 
     isa = "native bf16" if cpu_has_fast_bf16() else torch.backends.cpu.get_cpu_capability() + ", no native bf16"
     return f"{os.cpu_count()}-core {cpu_model()} ({isa})"
@@ -130,10 +130,10 @@ def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple
     """Release a training checkpoint (a motion model, with its EMA weights when it trained with EMA, or a
     GuidedMotion latent model with its VAEs) with the training step, the run's
     command line and `provenance` (data, training time, machine, metrics) in the JSON."""
-    from motiondiff.checked_loading import torch_load
     from motiondiff.lit.diffusion import MotionDiffusionModule
     from motiondiff.lit.latent import HierarchicalLatentModule
-    from motiondiff.provenance import git_state
+    from motiondiff.runtime.checked_loading import torch_load
+    from motiondiff.runtime.provenance import git_state
 
     state = torch_load(ckpt)
     cls = HierarchicalLatentModule if "vaes" in (state.get("hyper_parameters") or {}) else MotionDiffusionModule

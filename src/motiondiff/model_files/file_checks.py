@@ -7,10 +7,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motiondiff.checked_loading import CKPT_FIX, check_finite_state, torch_load
-from motiondiff.errors import UsageError
-from motiondiff.paths import RELEASE_SUFFIXES
-from motiondiff.release_checks import check_release_files
+from motiondiff.model_files.release_checks import check_release_files
+from motiondiff.model_files.resolve import RELEASE_SUFFIXES
+from motiondiff.runtime.checked_loading import CKPT_FIX, check_finite_state, torch_load
+from motiondiff.runtime.errors import UsageError
 
 
 def check_model_file(path: str | Path) -> None:

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motiondiff.checked_loading import CKPT_FIX, check_finite_state, check_same_shapes, reading
-from motiondiff.errors import UsageError
 from motiondiff.lit.motion_diffusion import MotionDiffusion
-from motiondiff.model_file_checks import checkpoint_state
-from motiondiff.paths import RELEASE_SUFFIXES
-from motiondiff.release import load_latent_release, load_release
+from motiondiff.model_files.file_checks import checkpoint_state
+from motiondiff.model_files.release import load_latent_release, load_release
+from motiondiff.model_files.resolve import RELEASE_SUFFIXES
+from motiondiff.runtime.checked_loading import CKPT_FIX, check_finite_state, check_same_shapes, reading
+from motiondiff.runtime.errors import UsageError
 
 
 def load_model(path: str | Path, device: str = "cpu") -> MotionDiffusion:

@@ -3,7 +3,7 @@ overlong prompt before they load a model."""
 
 from __future__ import annotations
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 MAX_TEXT_CHARS = 1000  # far beyond any caption the encoders were trained on (CLIP keeps 77 tokens)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motiondiff.rotations import qmul, qrot
+from motiondiff.geometry.rotations import qmul, qrot
 
 
 def forward_kinematics(

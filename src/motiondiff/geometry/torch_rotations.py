@@ -1,6 +1,6 @@
 """Differentiable rotation conversions in torch (any leading batch shape, the input's dtype and device).
 
-Same conventions as motiondiff.rotations (the numpy twin used for encoding): quaternions (w, x, y, z), matrices act
+Same conventions as motiondiff.geometry.rotations (the numpy twin used for encoding): quaternions (w, x, y, z), matrices act
 on column vectors, 6D = first two matrix columns (R00, R10, R20, R01, R11, R21), intrinsic Euler angles where the
 order "XYZ" means R = Rx(a0) @ Ry(a1) @ Rz(a2) - but angles here are in RADIANS (losses and decoders want them).
 

@@ -7,7 +7,7 @@ import torch
 from torch import Tensor
 from torchmetrics import Metric
 
-from motiondiff.eval.metrics._base import (
+from motiondiff.metrics._base import (
     _cdist,
     _check_features,
     _gathered,

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from safetensors import SafetensorError
 
-from motiondiff.errors import UsageError
+from motiondiff.runtime.errors import UsageError
 
 CKPT_FIX = "give a checkpoint a motiondiff run wrote (its last.ckpt or best-fid-*.ckpt) or a release (.safetensors)"
 # What reading or rebuilding from a broken or foreign file raises (a UsageError, a ValueError, passes unchanged).

@@ -1,0 +1,1 @@
+"""Geometry: skeletons, rotations, forward and inverse kinematics, and the check every motion array passes."""

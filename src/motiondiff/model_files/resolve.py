@@ -1,0 +1,73 @@
+"""Which model file a name or path means: the one resolver behind `checkpoint=` on every command and
+`from_pretrained` in the Python API, so both take the same names.
+
+Names: "shipped" (the released model for the condition asked: text, or action), the condition names themselves
+("text", "action", "guidedmotion" once a GuidedMotion model is released), a release's file stem in
+checkpoints/models ("bandai_text_cpu"), "latest" / "best" (the newest training run's last or best-FID checkpoint),
+or a path to a .ckpt / .safetensors / .json file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import REPO_DIR, work_dir
+
+MODELS_DIR = REPO_DIR / "checkpoints" / "models"
+RELEASE_SUFFIXES = (".safetensors", ".json")
+# checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
+SHIPPED_MODELS = {
+    "text": MODELS_DIR / "bandai_text_long_12k.safetensors",  # docs/results/shipping/rules.md
+    "action": MODELS_DIR / "bandai_action_cpu.safetensors",
+}
+RUN_NAMES = ("latest", "best")
+
+
+def released_names() -> list[str]:
+    """Every name `find_model` takes for a released file: the condition names and the stems in checkpoints/models."""
+    return sorted({*SHIPPED_MODELS, *(p.stem for p in MODELS_DIR.glob("*.safetensors") if "." not in p.stem)})
+
+
+def find_model(spec: str | Path, output_dir: str | Path | None = None, condition: str = "text") -> Path:
+    """The model file that `spec` names (see the module docstring); `condition` picks what "shipped" means;
+    `output_dir` is where "latest"/"best" look for runs (default: this checkout's or folder's outputs/)."""
+    key = str(spec)
+    if key == "shipped":
+        key = condition
+    if key in SHIPPED_MODELS and not Path(key).is_file():
+        shipped = SHIPPED_MODELS[key]
+        if not shipped.is_file():
+            raise UsageError(f"the shipped {key} model {shipped} is missing: restore it with "
+                             "`git checkout -- checkpoints`")  # fmt: skip
+        return shipped
+    if key == "guidedmotion" and key not in SHIPPED_MODELS:
+        raise UsageError("no GuidedMotion model is released yet: train one (train_vae.py, then train_latent.py) and "
+                         "pass checkpoint=<its .ckpt>")  # fmt: skip
+    if key in RUN_NAMES:
+        return _from_runs(key, Path(output_dir) if output_dir is not None else work_dir() / "outputs")
+    if "/" not in key and (MODELS_DIR / f"{key}.safetensors").is_file():
+        return MODELS_DIR / f"{key}.safetensors"
+    path = Path(key)
+    if not path.is_file():
+        raise UsageError(f"no model {key!r}: give a released model ({', '.join(released_names())}), shipped, latest, "
+                         "best, or a path to a .ckpt or .safetensors file")  # fmt: skip
+    return path
+
+
+def _from_runs(which: str, output_dir: Path) -> Path:
+    runs = sorted(output_dir.glob("train*/**/checkpoints/last.ckpt"), key=lambda p: p.stat().st_mtime)
+    if not runs:
+        raise UsageError(
+            f"no trained checkpoint under {output_dir}/train*: train one first (`make train` or `python train.py`) "
+            "pass checkpoint=<path to a .ckpt>, or use the released model: checkpoint=shipped"
+        )
+    if which == "latest":
+        return runs[-1]
+    best = sorted(runs[-1].parent.glob("best-fid-*.ckpt"))
+    if not best:
+        raise UsageError(
+            f"the newest run {runs[-1].parent.parent} has no best-FID checkpoint (it trained without evaluators or "
+            "never evaluated); use checkpoint=latest"
+        )
+    return best[-1]
