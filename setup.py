@@ -2,7 +2,7 @@
 
 The configs (conf/), the released models and evaluators (checkpoints/) and the embedded real data (data/) stay at the
 top of the repository, where the project keeps them; a wheel built from it copies them into motiondiff/_bundled/,
-which `motiondiff.paths` finds first. An editable install reads them in place.
+which `motiondiff.runtime.paths` finds first. An editable install reads them in place.
 """
 
 import shutil
