@@ -73,7 +73,8 @@ def test_timed_prompt_errors_are_one_clear_line(text_ckpt, tmp_path, overrides, 
     from hydra import compose, initialize_config_dir
 
     from motiondiff.cli.prompt_inputs import split_timed
-    from motiondiff.cli.sample import collect_prompts, long_motion_settings
+    from motiondiff.cli.sample import collect_prompts
+    from motiondiff.edit.long_motion import check_long_settings
     from motiondiff.model_files.loading import load_model
     from motiondiff.runtime.errors import UsageError
     from motiondiff.runtime.paths import CONF_DIR
@@ -85,7 +86,8 @@ def test_timed_prompt_errors_are_one_clear_line(text_ckpt, tmp_path, overrides, 
     with pytest.raises(UsageError, match=message):
         plain, seconds = split_timed(cfg)
         module = load_model(text_ckpt)
-        long_motion_settings(cfg, module, collect_prompts(plain, module), seconds)
+        check_long_settings(module, collect_prompts(plain, module), seconds, cfg.overlap, cfg.blend, cfg.edit_mode,
+                            cfg.resample)  # fmt: skip
 
 
 def test_parse_timed_prompts():

@@ -12,17 +12,16 @@ from omegaconf import DictConfig, ListConfig
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps
 from motiondiff.cli.outputs import cleanup_option, export_formats
 from motiondiff.cli.validate import RULES_EDIT, check
-from motiondiff.edit.api import EditResult, edit_parts, inbetween
-from motiondiff.edit.cleanups import apply_cleanups, check_for_edit
-from motiondiff.edit.inputs import InputMotion, clip_data_root, load_input_motion, read_bvh_input
+from motiondiff.edit.api import edit_parts, inbetween
+from motiondiff.edit.cleanups import check_for_edit
+from motiondiff.edit.inputs import clip_data_root, load_input_motion, read_bvh_input
 from motiondiff.edit.masks import EditError, frames_from_seconds
-from motiondiff.edit.measures import edit_numbers
-from motiondiff.export.naming import slug
-from motiondiff.export.outputs import check_formats_for, export_features
+from motiondiff.edit.saving import save_edits
+from motiondiff.export.outputs import check_formats_for
 from motiondiff.lit.conditions import check_action
 from motiondiff.lit.generation import check_num_samples, feed_forward_shape, sampling_precision
 from motiondiff.model_files.loading import load_model as load_module
-from motiondiff.runtime.atomic import finite_or_null, save_npy, write_json
+from motiondiff.runtime.atomic import finite_or_null, write_json
 from motiondiff.runtime.hardware import inference_precision, resolve_device
 from motiondiff.runtime.prompt_text import check_text
 
@@ -145,34 +144,3 @@ def run(cfg: DictConfig) -> Path:
         print(f"  sample {r['index']}: kept-part error {r['kept_max_error_m']:.1e} m, {extra}")
     print(f"\n{len(rows)} edit(s) written to {out}")
     return out
-
-
-def save_edits(
-    out: Path, result: EditResult, motion: InputMotion, module, formats, condition, cleanup=(), rig_names=None
-) -> list[dict]:
-    """The input and each edit as arrays and the ``formats`` (export.outputs); one results row per edit. With
-    ``cleanup=("feet",)`` the saved joints are foot-skate cleaned (kept frames and joints untouched; the model's joints
-    go to *_joints_raw.npy) and the row reports the sliding before and after."""
-    fps = float(module.hparams.fps)
-    rep = module.representation
-    title = f"{result.kind}: {condition or 'unconditioned'}"
-    inputs = export_features(out / "input", rep, motion.features, fps, formats, title="input", rig_names=rig_names)
-    save_npy(out / "keep_mask.npy", result.keep[0])
-    rows = []
-    for k in range(len(result)):
-        stem = out / f"{result.kind}_{slug(condition)}_{k:02d}"
-        files = {"joints": f"{stem}_joints.npy", "features": f"{stem}_features.npy",
-                 "input_joints": f"{stem}_input_joints.npy"}  # fmt: skip
-        joints, cleaned = result.joints[k], {}
-        if cleanup:
-            save_npy(f"{stem}_joints_raw.npy", joints)
-            joints, cleaned = apply_cleanups(joints, rep.skeleton, fps, cleanup, keep=result.kept_points(k))
-        save_npy(files["joints"], joints)
-        save_npy(files["features"], result.features[k])
-        save_npy(files["input_joints"], result.input_joints[k])
-        exports = export_features(stem, rep, result.features[k], fps, formats, title=title,
-                                  joints=joints if cleaned else None, rig_names=rig_names)  # fmt: skip
-        rows.append({"index": k, **files, "video": exports.get("mp4", exports.get("gif")), "exports": exports,
-                     "input_video": inputs.get("mp4", inputs.get("gif")), "input_exports": inputs,
-                     **edit_numbers(result, k, fps), **cleaned})  # fmt: skip
-    return rows

@@ -10,46 +10,23 @@ ground contacts (`edit.foot_cleanup`)."""
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
-import numpy as np
-import torch
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.cli.common import (
-    UsageError,
-    apply_clip_x0,
-    find_model,
-    sampling_steps,
-    to_dict,
-)
-from motiondiff.cli.outputs import (
-    cleanup_option,
-    export_formats,
-    render_option,
-    save_samples,
-    smoothing_sigma,
-)
+from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps, to_dict
+from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma
 from motiondiff.cli.prompt_inputs import check_one_source, read_prompts_file, split_timed
 from motiondiff.cli.validate import RULES_SAMPLE, check
-from motiondiff.edit.inpaint import EDIT_MODES
-from motiondiff.edit.long_motion import boundary_report, generate_long
-from motiondiff.edit.smoothing import smooth_joints
-from motiondiff.export.naming import slug, unique_stems
 from motiondiff.export.outputs import check_formats_for
-from motiondiff.lit.conditions import check_action, generation_frames, repeated
-from motiondiff.lit.generation import (
-    MAX_LONG_SAMPLES,
-    check_num_samples,
-    feed_forward_shape,
-    generate_features,
-    sampling_precision,
-)
+from motiondiff.lit.conditions import check_action, generation_frames
+from motiondiff.lit.generation import MAX_LONG_SAMPLES, check_num_samples, feed_forward_shape
 from motiondiff.lit.motion_diffusion import MotionDiffusion
 from motiondiff.model_files.loading import load_model
-from motiondiff.pipelines.coverage import far_prompts, load_coverage
-from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.pipelines import MotionPipeline
+from motiondiff.pipelines.coverage import PromptCoverageWarning, far_prompts
 from motiondiff.runtime.hardware import inference_precision, resolve_device
 from motiondiff.runtime.prompt_text import check_text
 
@@ -83,12 +60,8 @@ def collect_prompts(cfg: DictConfig, module: MotionDiffusion) -> list[str | None
     return [check_text(t) for t in texts]
 
 
-def num_frames(cfg: DictConfig, module: MotionDiffusion) -> int:
-    """frames= as given, else length= in seconds."""
-    return generation_frames(module, cfg.length, frames=cfg.frames)
-
-
 def run(cfg: DictConfig) -> Path:
+    """Checked config -> MotionPipeline -> call (or `long` for timed prompts) -> MotionOutput.save."""
     check(cfg, RULES_SAMPLE)  # types and ranges before any work
     check_num_samples(cfg.num_samples)
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
@@ -99,102 +72,42 @@ def run(cfg: DictConfig) -> Path:
     plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
     if seconds is not None:  # a long motion's windows chain, sampled in one batch
         check_num_samples(cfg.num_samples, MAX_LONG_SAMPLES)
+        if cfg.frames is not None:
+            raise UsageError("timed prompts set their own lengths: drop frames= (length= is ignored too)")
     formats, cleanup, body = export_formats(cfg), cleanup_option(cfg), render_option(cfg)
     module = load_model(ckpt, cfg.device)
     check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"), body)
     prompts = collect_prompts(plain, module)
-    far = [r.warning() for r in far_prompts(module, load_coverage(module, ckpt), prompts)]
-    for line in far:  # one line per far prompt, before the sampling
-        print(f"warning: {line}", file=sys.stderr)
-    frames = num_frames(cfg, module) if seconds is None else None
+    frames = generation_frames(module, cfg.length, frames=cfg.frames) if seconds is None else None
     sigma = smoothing_sigma(cfg, module)
-    if cfg.num_samples < 1:
-        raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)
     if guidance < 0:
         raise UsageError(f"guidance must be >= 0, got {guidance}")
     steps = sampling_steps(cfg, module)
     apply_clip_x0(cfg, module)
-    generator = torch.Generator(device=cfg.device).manual_seed(int(cfg.seed))
     shape = feed_forward_shape(module, int(cfg.num_samples), frames or int(module.hparams.max_frames))
-    precision = inference_precision(cfg.get("precision", "auto"), cfg.device, shape)
+    pipe = MotionPipeline(module, str(ckpt), inference_precision(cfg.get("precision", "auto"), cfg.device, shape))
+    far = [r.warning() for r in far_prompts(module, pipe.coverage, prompts)]
+    for line in far:  # one line per far prompt, before the sampling
+        print(f"warning: {line}", file=sys.stderr)
+    options = dict(num_samples=int(cfg.num_samples), guidance=guidance, sampler=cfg.sampler.name, steps=steps,
+                   eta=float(cfg.sampler.eta), seed=int(cfg.seed), smooth_sigma=sigma, progress=True)  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PromptCoverageWarning)  # printed above, as one line each
+        if seconds is None:
+            print(f"sampling {cfg.num_samples} x {frames} frames for {len(prompts)} prompt(s)")
+            motions = pipe(prompts, frames=frames, **options)
+        else:
+            print(
+                f"sampling {cfg.num_samples} long motion(s) through {len(prompts)} timed prompts ({sum(seconds):g} s)"
+            )
+            motions = pipe.long(prompts, seconds, overlap=cfg.overlap, blend=cfg.blend, mode=cfg.edit_mode,
+                                resample=cfg.resample, **options)  # fmt: skip
+    motions = motions.cleaned(*cleanup) if cleanup else motions
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "steps": steps,
-               "precision": precision, "clip_x0": module.clip_rule, "coverage_warnings": far}  # fmt: skip
-    if seconds is not None:
-        with sampling_precision(module, precision):
-            summary.update(sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats,
-                                       cleanup, body))  # fmt: skip
-        write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
-        print(f"\n{cfg.num_samples} long motion(s) of {summary['long_motion']['seconds']:g} s written to {out}")
-        return out
-    results = []
-    for prompt, stem in zip(prompts, unique_stems(prompts), strict=True):
-        print(f"sampling {cfg.num_samples} x {frames} frames for {prompt or 'unconditioned'!r}")
-        n = int(cfg.num_samples)
-        feats = generate_features(module, [prompt] * n, torch.full((n,), frames), generator=generator,
-                                  guidance=guidance, sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta),
-                                  progress=True, precision=precision)  # fmt: skip
-        feats = np.stack(feats)
-        results += save_samples(out, prompt, feats, module, formats, sigma, stem=stem, cleanup=cleanup,
-                                rig_names=cfg.get("bvh_names"), body=body)  # fmt: skip
-    summary["samples"] = results
-    write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
-    print(f"\n{len(results)} sample(s) written to {out}")
+               "precision": pipe.precision, "clip_x0": module.clip_rule, "coverage_warnings": far,
+               **({"long_motion": motions.info["long_motion"]} if seconds is not None else {})}  # fmt: skip
+    rows = motions.save(out, formats, cfg.get("bvh_names"), body=body, summary=summary)
+    what = f"long motion(s) of {motions.seconds():g} s" if seconds is not None else "sample(s)"
+    print(f"\n{len(rows)} {what} written to {out}")
     return out
-
-
-def long_motion_settings(cfg, module, prompts: list, seconds: list[float]) -> tuple[float, float]:
-    """(overlap, blend) seconds for timed prompts, or a clear error for settings this model cannot do."""
-    if cfg.frames is not None:
-        raise UsageError("timed prompts set their own lengths: drop frames= (length= is ignored too)")
-    if cfg.edit_mode not in EDIT_MODES:
-        raise UsageError(f"edit_mode must be one of {', '.join(EDIT_MODES)}, got {cfg.edit_mode!r}")
-    if isinstance(cfg.resample, bool) or not isinstance(cfg.resample, int) or cfg.resample < 1:
-        raise UsageError(f"resample is RePaint's repeats per step, a whole number >= 1 (1: none), got {cfg.resample!r}")
-    fps, max_frames = module.hparams.fps, module.hparams.max_frames
-    overlap, blend = cfg.overlap, cfg.blend
-    if isinstance(overlap, bool) or not isinstance(overlap, int | float) or not 0 < overlap * fps < max_frames - 0.5:
-        raise UsageError(
-            f"overlap is the seconds each prompt continues from the one before: more than 0 and less than this "
-            f"model's {max_frames / fps:g} s, got {overlap!r}"
-        )
-    if isinstance(blend, bool) or not isinstance(blend, int | float) or not 0 <= blend < overlap:
-        raise UsageError(f"blend is the seconds at the end of the overlap that are cross-faded: 0 to less than "
-                         f"overlap={overlap:g}, got {blend!r}")  # fmt: skip
-    short = [f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True) if round(s * fps) < 1]
-    if short:
-        raise UsageError(f"each timed prompt needs at least one frame (1/{fps:g} s): {', '.join(short)}")
-    return float(overlap), float(blend)
-
-
-def sample_long(cfg, out, module, prompts, seconds, guidance, steps, generator, sigma, formats, cleanup=(), body=None):
-    """One long motion per sample through the timed prompts; returns the results.json entries."""
-    overlap, blend = long_motion_settings(cfg, module, prompts, seconds)
-    n = cfg.num_samples
-    segments = [(repeated(module, p, n), s) for p, s in zip(prompts, seconds, strict=True)]
-    print(f"sampling {n} long motion(s) through {len(prompts)} timed prompts ({sum(seconds):g} s)")
-    long = generate_long(
-        module, segments, overlap_s=overlap, blend_s=blend, num_samples=n, guidance=guidance,
-        sampler=cfg.sampler.name, steps=steps, eta=float(cfg.sampler.eta), generator=generator, mode=cfg.edit_mode,
-        resample=int(cfg.resample), labels=prompts, progress=True,
-    )  # fmt: skip
-    title = ", ".join(f"{p}:{s:g}" for p, s in zip(prompts, seconds, strict=True))
-    shown = [(s["start"], str(s["label"])) for s in long.segments]  # the videos show the prompt playing
-    rows = save_samples(out, title, long.features, module, formats, sigma, stem=f"long_{slug(' then '.join(prompts))}",
-                        cleanup=cleanup, title=shown, rig_names=cfg.get("bvh_names"), body=body)  # fmt: skip
-    seams, blends = [w.plan.start for w in long.windows[1:]], [w.plan.blend for w in long.windows[1:]]
-    for row, joints, boundaries in zip(rows, long.joints, long.boundaries, strict=True):
-        if sigma is not None:  # the filter also runs across the seams: how they look in the saved joints
-            after = boundary_report(smooth_joints(joints, sigma), seams, long.fps, blends=blends)
-            for b, a in zip(boundaries, after, strict=True):
-                b["ratio_smoothed"] = a["ratio"]
-        row["frames"] = long.num_frames
-        row["boundaries"] = boundaries
-        row["max_boundary_ratio"] = max((b["ratio"] for b in boundaries), default=None)
-    windows = [{"segment": w.plan.segment, "start": w.plan.start, "end": w.plan.end, "overlap": w.plan.overlap,
-                "blend": w.plan.blend} for w in long.windows]  # fmt: skip
-    info = {"segments": long.segments, "windows": windows, "frames": long.num_frames,
-            "seconds": long.num_frames / long.fps, "overlap_frames": max((w["overlap"] for w in windows), default=0),
-            "blend_frames": max((w["blend"] for w in windows), default=0), "edit_mode": cfg.edit_mode,
-            "max_frames": int(module.hparams.max_frames)}  # fmt: skip
-    return {"long_motion": info, "samples": rows}

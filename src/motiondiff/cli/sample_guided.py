@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
@@ -17,7 +16,6 @@ from motiondiff.cli.common import UsageError, find_model
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.models.hierarchical import LEVELS
-from motiondiff.runtime.atomic import finite_or_null, write_json
 from motiondiff.runtime.hardware import resolve_device
 
 
@@ -44,7 +42,7 @@ def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, 
 
 
 def run(cfg: DictConfig) -> Path:
-    from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, save_samples, smoothing_sigma
+    from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma
     from motiondiff.cli.validate import RULES_SAMPLE, check
     from motiondiff.export.outputs import check_formats_for
     from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
@@ -85,24 +83,14 @@ def run(cfg: DictConfig) -> Path:
                   local_weights=weights, local_candidates=int(cfg.local_candidates), local_choice=_choice(cfg.local_choice),
                   level_steps=tuple(steps[level] for level in LEVELS), guidance=cfg.guidance, rho=float(cfg.rho),
                   seed=int(cfg.seed), sampler=str(cfg.sampler.name))  # fmt: skip
-    rows = save_samples(
-        out,
-        text,
-        np.stack(result.features),
-        module.decoder,
-        formats,
-        sigma,
-        cleanup=cleanup,
-        rig_names=cfg.get("bvh_names"),
-        body=body,
-    )
+    motions = result.smoothed(sigma)
+    motions = motions.cleaned(*cleanup) if cleanup else motions
     summary = {
         "method": "guidedmotion", "checkpoint": str(path), "text": text, "sampler": result.info["sampler"],
         "level_steps": steps, "rho": float(cfg.rho),
         "guidance": module.hparams.sampling.get("guidance", 7.5) if cfg.guidance is None else float(cfg.guidance),
         "local_actions": result.info["local_actions"],
-        "samples": rows,
     }  # fmt: skip
-    write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
+    rows = motions.save(out, formats, cfg.get("bvh_names"), body=body, summary=summary)
     print(f"\n{len(rows)} GuidedMotion sample(s) of {text!r} written to {out}")
     return out

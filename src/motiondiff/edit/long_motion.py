@@ -38,8 +38,10 @@ import numpy as np
 import torch
 
 from motiondiff.edit.canonical import from_canonical, placement, to_canonical
-from motiondiff.edit.inpaint import SamplingOptions, inpaint
+from motiondiff.edit.inpaint import EDIT_MODES, SamplingOptions, inpaint
+from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.lit.generation import check_finite_output
+from motiondiff.runtime.errors import UsageError
 
 
 @dataclass(frozen=True)
@@ -216,3 +218,51 @@ def _continue(module, motion: np.ndarray, plan: WindowPlan, cond, mean, std, **s
 
 def _denormalise(features: torch.Tensor, mean: np.ndarray, std: np.ndarray) -> np.ndarray:
     return features.detach().cpu().double().numpy() * std + mean
+
+
+def check_long_settings(module, labels: Sequence, seconds: Sequence[float], overlap, blend, mode: str,
+                        resample) -> tuple[float, float]:  # fmt: skip
+    """(overlap, blend) in seconds for timed prompts, or one clear error for settings this model cannot do."""
+    if mode not in EDIT_MODES:
+        raise UsageError(f"edit_mode must be one of {', '.join(EDIT_MODES)}, got {mode!r}")
+    if isinstance(resample, bool) or not isinstance(resample, int) or resample < 1:
+        raise UsageError(f"resample is RePaint's repeats per step, a whole number >= 1 (1: none), got {resample!r}")
+    fps, max_frames = module.hparams.fps, module.hparams.max_frames
+    if isinstance(overlap, bool) or not isinstance(overlap, int | float) or not 0 < overlap * fps < max_frames - 0.5:
+        raise UsageError(
+            f"overlap is the seconds each prompt continues from the one before: more than 0 and less than this "
+            f"model's {max_frames / fps:g} s, got {overlap!r}"
+        )
+    if isinstance(blend, bool) or not isinstance(blend, int | float) or not 0 <= blend < overlap:
+        raise UsageError(f"blend is the seconds at the end of the overlap that are cross-faded: 0 to less than "
+                         f"overlap={overlap:g}, got {blend!r}")  # fmt: skip
+    short = [f"{p}:{s:g}" for p, s in zip(labels, seconds, strict=True) if round(s * fps) < 1]
+    if short:
+        raise UsageError(f"each timed prompt needs at least one frame (1/{fps:g} s): {', '.join(short)}")
+    return float(overlap), float(blend)
+
+
+def long_motion_info(long: LongMotion, mode: str, module) -> dict:
+    """What results.json records of a long motion: its segments, windows, length, overlap and blend."""
+    windows = [{"segment": w.plan.segment, "start": w.plan.start, "end": w.plan.end, "overlap": w.plan.overlap,
+                "blend": w.plan.blend} for w in long.windows]  # fmt: skip
+    return {"segments": long.segments, "windows": windows, "frames": long.num_frames,
+            "seconds": long.num_frames / long.fps, "overlap_frames": max((w["overlap"] for w in windows), default=0),
+            "blend_frames": max((w["blend"] for w in windows), default=0), "edit_mode": mode,
+            "max_frames": int(module.hparams.max_frames)}  # fmt: skip
+
+
+def seam_rows(long: LongMotion, smooth_sigma: float | None = None) -> list[dict]:
+    """Per motion: its length and the speed jump at each seam against its median step (with ``smooth_sigma``, also
+    after vvMDM's filter, which runs across the seams as it does on the saved joints)."""
+    seams, blends = [w.plan.start for w in long.windows[1:]], [w.plan.blend for w in long.windows[1:]]
+    rows = []
+    for joints, boundaries in zip(long.joints, long.boundaries, strict=True):
+        boundaries = [dict(b) for b in boundaries]
+        if smooth_sigma:
+            after = boundary_report(smooth_joints(joints, float(smooth_sigma)), seams, long.fps, blends=blends)
+            for b, a in zip(boundaries, after, strict=True):
+                b["ratio_smoothed"] = a["ratio"]
+        rows.append({"frames": long.num_frames, "boundaries": boundaries,
+                     "max_boundary_ratio": max((b["ratio"] for b in boundaries), default=None)})  # fmt: skip
+    return rows

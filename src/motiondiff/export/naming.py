@@ -27,9 +27,9 @@ def unique_stems(prompts: list[str | None]) -> list[str]:
     return stems
 
 
-def motion_stems(prompts: list[str | None]) -> list[str]:
-    """The stem of each motion of a batch whose i-th motion was made from ``prompts[i]``: its prompt's unique stem
-    and its number among that prompt's motions."""
+def motion_stems(prompts: list[str | None], prefix: str = "") -> list[str]:
+    """The stem of each motion of a batch whose i-th motion was made from ``prompts[i]``: ``prefix`` (``long_`` for
+    one motion through several prompts), its prompt's unique stem and its number among that prompt's motions."""
     distinct = list(dict.fromkeys(prompts))
     stem_of = dict(zip(distinct, unique_stems(distinct), strict=True))
     counts: dict = {}
@@ -37,5 +37,5 @@ def motion_stems(prompts: list[str | None]) -> list[str]:
     for prompt in prompts:
         k = counts.get(prompt, 0)
         counts[prompt] = k + 1
-        stems.append(f"{stem_of[prompt]}_{k:02d}")
+        stems.append(f"{prefix}{stem_of[prompt]}_{k:02d}")
     return stems

@@ -49,10 +49,14 @@ def find_model(spec: str | Path, output_dir: str | Path | None = None, condition
     if "/" not in key and (MODELS_DIR / f"{key}.safetensors").is_file():
         return MODELS_DIR / f"{key}.safetensors"
     path = Path(key)
-    if not path.is_file():
-        raise UsageError(f"no model {key!r}: give a released model ({', '.join(released_names())}), shipped, latest, "
-                         "best, or a path to a .ckpt or .safetensors file")  # fmt: skip
-    return path
+    if path.is_file():
+        return path
+    if "/" in key or path.suffix:  # meant as a file
+        raise UsageError(f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt or .safetensors release>, "
+                         f"checkpoint=shipped, checkpoint=latest, checkpoint=best or a released model's name "
+                         f"({', '.join(released_names())})")  # fmt: skip
+    raise UsageError(f"no model {key!r}: give a released model ({', '.join(released_names())}), shipped, latest, "
+                     "best, or a path to a .ckpt or .safetensors file")  # fmt: skip
 
 
 def _from_runs(which: str, output_dir: Path) -> Path:

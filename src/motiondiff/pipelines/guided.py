@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.data.representations.spec import bridge_from_spec
 from motiondiff.guided.local_actions import (
     LocalActionError,
     check_weights,
@@ -120,7 +121,9 @@ class GuidedMotionPipeline:
                 "rho": float(rho), "seed": seed,
                 "local_actions": [{"text": t, "source": s, "weight": w}
                                   for t, s, w in zip(local.texts, local.sources, weights, strict=True)]}  # fmt: skip
-        return MotionOutput(joints, feats, [text] * num_samples, self.fps, rep.skeleton, rep, info)
+        hp = self.latent.decoder.hparams
+        bridge = bridge_from_spec(hp.get("representation"), hp.get("feature_dim"))
+        return MotionOutput(joints, feats, [text] * num_samples, self.fps, rep.skeleton, rep, info, bridge)
 
     def _text_encoder(self):
         if self._encoder is None:

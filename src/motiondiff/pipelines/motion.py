@@ -18,12 +18,12 @@ from typing import Any
 import numpy as np
 import torch
 
+from motiondiff.data.representations.spec import bridge_from_spec
 from motiondiff.edit.api import edit_parts as _edit_parts
 from motiondiff.edit.api import inbetween as _inbetween
 from motiondiff.edit.inputs import InputMotion, load_input_motion
-from motiondiff.edit.long_motion import generate_long
+from motiondiff.edit.long_motion import check_long_settings, generate_long, long_motion_info, seam_rows
 from motiondiff.edit.masks import EditError
-from motiondiff.edit.smoothing import smooth_joints
 from motiondiff.lit.conditions import check_action, generation_frames, repeated
 from motiondiff.lit.generation import (
     MAX_LONG_SAMPLES,
@@ -87,6 +87,7 @@ class MotionPipeline:
         prompt: str | int | list | None = None,
         *,
         seconds: float | list[float] = 4.0,
+        frames: int | list[int] | None = None,
         num_samples: int = 1,
         guidance: float | None = None,
         sampler: str = "auto",
@@ -94,61 +95,81 @@ class MotionPipeline:
         eta: float = 0.0,
         seed: int = 0,
         smooth_sigma: float | None = None,
+        progress: bool = False,
     ) -> MotionOutput:
         """``num_samples`` motions per prompt: texts (text models), action names or ids (action models) or None
-        (unconditioned); one prompt or a list. ``seconds``: one length, or one per prompt. ``guidance``: the
-        classifier-free guidance scale (None: the model's default); ``sampler``: auto (the model's own default:
-        DPM-Solver++(2M) unless its recipe chose another on val), dpmpp, ddim or ddpm; ``steps``: sampler steps (None: 7 for DPM-Solver++, 50 for DDIM, the whole chain for
-        DDPM, at most the model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
+        (unconditioned); one prompt or a list. ``seconds``: one length, or one per prompt (``frames``: the same in
+        frames, in place of seconds). ``guidance``: the classifier-free guidance scale (None: the model's default);
+        ``sampler``: auto (the model's own default: DPM-Solver++(2M) unless its recipe chose another on val), dpmpp,
+        ddim or ddpm; ``steps``: sampler steps (None: 7 for DPM-Solver++, 50 for DDIM, the whole chain for DDPM, at
+        most the model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
         prompts = self._prompts(prompt)
-        lengths = [self._frames(s) for s in self._per_prompt(seconds, len(prompts), "seconds")]
+        if frames is None:
+            lengths = [self._frames(s) for s in self._per_prompt(seconds, len(prompts), "seconds")]
+        else:
+            lengths = [generation_frames(self.model, None, frames=f) for f in self._per_prompt(frames, len(prompts), "frames")]  # fmt: skip
         far = warn_far(self.model, self.coverage, prompts)
         n = self._count(num_samples)
         sampling = self._sampling(guidance, sampler, steps, eta)
         conditions = [p for p in prompts for _ in range(n)]
-        frames = torch.tensor([f for f in lengths for _ in range(n)])
+        lengths = torch.tensor([f for f in lengths for _ in range(n)])
         generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
-        feats = generate_features(self.model, conditions, frames, batch_size=64, generator=generator,
-                                  precision=self.precision, **sampling)  # fmt: skip
+        feats = generate_features(self.model, conditions, lengths, batch_size=64, generator=generator,
+                                  precision=self.precision, progress=progress, **sampling)  # fmt: skip
         joints = [self.model.representation.decode_numpy(f).astype(np.float32) for f in feats]
-        if smooth_sigma:
-            joints = [smooth_joints(j, float(smooth_sigma)) for j in joints]
-        info = {"model": self.source, **sampling, "seed": int(seed), "smooth_sigma": smooth_sigma,
-                "precision": self.precision, "joints_changed": bool(smooth_sigma), "coverage_warnings": far}  # fmt: skip
-        return self._output(joints, feats, [self._label(c) for c in conditions], info)
+        info = {"model": self.source, **sampling, "seed": int(seed), "smooth_sigma": None,
+                "precision": self.precision, "joints_changed": False, "coverage_warnings": far}  # fmt: skip
+        return self._output(joints, feats, [self._label(c) for c in conditions], info).smoothed(smooth_sigma)
 
     def long(
         self,
-        prompts: list[str],
+        prompts: list,
         seconds: float | list[float] = 4.0,
         *,
         overlap: float = 1.0,
         blend: float = 0.25,
         num_samples: int = 1,
         seed: int = 0,
-        **sampling: Any,
+        guidance: float | None = None,
+        sampler: str = "auto",
+        steps: int | None = None,
+        eta: float = 0.0,
+        mode: str = "overwrite",
+        resample: int = 1,
+        smooth_sigma: float | None = None,
+        progress: bool = False,
     ) -> MotionOutput:
         """One motion per sample that does the prompts in order, each for its seconds (plain strings, or
-        "text:seconds"); each part continues from the last ``overlap`` seconds of the one before."""
-        texts, secs = [], []
+        "text:seconds"; action names for an action model); each part continues from the last ``overlap`` seconds of
+        the one before, of which the last ``blend`` seconds are cross-faded. ``mode``: how the held frames are kept
+        (``edit.inpaint.EDIT_MODES``); ``resample``: RePaint's repeats per step (1: none). Sampling options as for
+        a call. results.json gets the windows and, per motion, the speed jump at each seam against its median."""
+        items, secs = [], []
         for item, s in zip(prompts, self._per_prompt(seconds, len(prompts), "seconds"), strict=True):
             text, _, timed = str(item).rpartition(":") if _is_timed(item) else (item, "", "")
-            texts.append(check_text(text))
+            items.append(text)
             secs.append(float(timed) if timed else float(s))
-        far = warn_far(self.model, self.coverage, texts)
+        conditions = self._prompts(items)
+        labels = [self._label(c) for c in conditions]
+        overlap, blend = check_long_settings(self.model, labels, secs, overlap, blend, mode, resample)
+        far = warn_far(self.model, self.coverage, conditions)
         n = check_num_samples(num_samples, MAX_LONG_SAMPLES)  # a long motion's windows chain: one batch
+        sampling = self._sampling(guidance, sampler, steps, eta)
         generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
-        segments = [(repeated(self.model, t, n), s) for t, s in zip(texts, secs, strict=True)]
+        segments = [(repeated(self.model, c, n), s) for c, s in zip(conditions, secs, strict=True)]
         try:
             with sampling_precision(self.model, self.precision):
-                result = generate_long(self.model, segments, overlap_s=float(overlap), blend_s=float(blend),
-                                       num_samples=n, generator=generator, labels=texts, **sampling)  # fmt: skip
+                result = generate_long(self.model, segments, overlap_s=overlap, blend_s=blend, num_samples=n,
+                                       generator=generator, labels=labels, mode=mode, resample=int(resample),
+                                       progress=progress, **sampling)  # fmt: skip
         except ValueError as err:
             raise UsageError(str(err)) from None
-        title = " then ".join(texts)
         info = {"model": self.source, "segments": result.segments, "seed": int(seed), **sampling,
-                "coverage_warnings": far}  # fmt: skip
-        return self._output(list(result.joints), list(result.features), [title] * n, info)
+                "coverage_warnings": far, "long_motion": long_motion_info(result, mode, self.model),
+                "per_motion": seam_rows(result, smooth_sigma)}  # fmt: skip
+        title = ", ".join(f"{label}:{s:g}" for label, s in zip(labels, secs, strict=True))
+        joints = [j.astype(np.float32) for j in result.joints]
+        return self._output(joints, list(result.features), [title] * n, info).smoothed(smooth_sigma)
 
     # ---- editing ------------------------------------------------------------------------------------------------
     def inbetween(self, motion, prompt=None, *, prefix=None, suffix=None, num_samples: int = 1, seed: int = 0,
@@ -204,7 +225,8 @@ class MotionPipeline:
 
     def _output(self, joints, feats, prompts, info) -> MotionOutput:
         rep = self.model.representation
-        return MotionOutput(joints, [np.asarray(f) for f in feats], prompts, self.fps, rep.skeleton, rep, info)
+        bridge = bridge_from_spec(self.model.hparams.get("representation"), self.model.hparams.feature_dim)
+        return MotionOutput(joints, [np.asarray(f) for f in feats], prompts, self.fps, rep.skeleton, rep, info, bridge)
 
     def _prompts(self, prompt) -> list:
         items = list(prompt) if isinstance(prompt, list | tuple) else [prompt]

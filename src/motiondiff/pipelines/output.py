@@ -4,13 +4,17 @@ export or show them."""
 from __future__ import annotations
 
 import tempfile
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from motiondiff.data.preparing.captions import measure
 from motiondiff.data.representations import Representation
+from motiondiff.data.representations.spec import HMLBridge
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
+from motiondiff.edit.measures import mean_joint_speed
+from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.export.naming import motion_stems
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
 from motiondiff.export.smpl_mesh import render_body
@@ -30,6 +34,8 @@ class MotionOutput:
     skeleton: Skeleton
     representation: Representation = field(repr=False)
     info: dict = field(default_factory=dict)  # how they were made (model, sampler, guidance, seed, edit settings)
+    # the model's features -> the joints its measures read (SMPL-22/KIT-21; identity for hml263/kit251)
+    bridge: HMLBridge | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.joints)
@@ -56,29 +62,72 @@ class MotionOutput:
         *,
         render: str = "stick",
         smpl_model: str | Path | None = None,
+        body=None,
+        summary: dict | None = None,
     ) -> list[dict]:
-        """Write each motion's joints and features (.npy) and the ``formats`` (bvh, mp4, gif, html, smpl) to
-        ``folder``, with results.json listing the files; returns its rows. The folder is created if needed; formats
-        the skeleton cannot take (smpl off SMPL-22/24) are refused before anything is written. ``rig_names``: bone
-        names of the bvh/fbx/glb files (smpl or mixamo; None: the skeleton's). ``render="mesh"`` with
-        ``smpl_model=`` (the user's SMPL body model .npz) makes the mp4/gif videos show that body's mesh."""
+        """Write each motion's joints and features (.npy; the joints before smoothing or clean-up as *_joints_raw.npy)
+        and the ``formats`` (bvh, mp4, gif, html, smpl) to ``folder``, with results.json: ``summary``, ``info`` and
+        one row per motion with its files and what it measurably does (travel, speed, raised hands, smoothness
+        before and after smoothing, what each clean-up did). The folder is created if needed; formats the skeleton
+        cannot take (smpl off SMPL-22/24) are refused before anything is written. ``rig_names``: bone names of the
+        bvh/fbx/glb files (smpl or mixamo; None: the skeleton's). ``render="mesh"`` with ``smpl_model=`` (the user's
+        SMPL body model .npz; or an already loaded ``body``) makes the mp4/gif videos show that body's mesh."""
         formats = parse_formats(list(formats) if not isinstance(formats, str) else formats)
-        body = render_body(render, smpl_model)
+        body = body if body is not None else render_body(render, smpl_model)
         check_formats_for(formats, self.representation.skeleton, rig_names, body)
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        rows = []
-        stems = motion_stems(self.prompts)  # the commands' scheme: <prompt>_<k>
-        for i, (joints, feats, prompt) in enumerate(zip(self.joints, self.features, self.prompts, strict=True)):
-            stem = folder / stems[i]
-            save_npy(f"{stem}_joints.npy", joints.astype(np.float32))
-            save_npy(f"{stem}_features.npy", feats.astype(np.float32))
-            exports = export_features(stem, self.representation, feats, self.fps, formats, title=prompt or "",
-                                      joints=self._changed(i), rig_names=rig_names, body=body)  # fmt: skip
-            rows.append({"prompt": prompt, "index": i, "frames": len(joints), "joints": f"{stem}_joints.npy",
-                         "features": f"{stem}_features.npy", "exports": exports})  # fmt: skip
-        write_json(folder / "results.json", finite_or_null({"info": self.info, "samples": rows}), default=str)
+        long = self.info.get("long_motion")  # one motion through several prompts: long_<prompts joined by "then">_<k>
+        names = [" then ".join(str(s["label"]) for s in long["segments"])] * len(self) if long else self.prompts
+        stems = motion_stems(names, "long_" if long else "")  # <prompt>_<k>, as the commands
+        rows = [self._save_one(folder / stem, i, formats, rig_names, body) for i, stem in enumerate(stems)]
+        doc = {**(summary or {}), "info": self.info, "samples": rows}
+        write_json(folder / "results.json", finite_or_null(doc), default=str)
         return rows
+
+    def _save_one(self, stem: Path, i: int, formats, rig_names, body) -> dict:
+        joints, feats, prompt = self.joints[i], self.features[i], self.prompts[i]
+        changed = self._changed(i)
+        if changed is not None:
+            save_npy(f"{stem}_joints_raw.npy", self.representation.decode_numpy(feats).astype(np.float32))
+        save_npy(f"{stem}_joints.npy", joints.astype(np.float32))
+        save_npy(f"{stem}_features.npy", np.asarray(feats, dtype=np.float32))
+        long = self.info.get("long_motion")
+        title = [(s["start"], str(s["label"])) for s in long["segments"]] if long else prompt or "unconditioned"
+        exports = export_features(stem, self.representation, feats, self.fps, formats, title=title, joints=changed,
+                                  rig_names=rig_names, body=body)  # fmt: skip
+        measured, smoothing = self._measured(i)
+        per_motion = self.info.get("per_motion") or [{}] * len(self)
+        return {"prompt": prompt, "index": int(stem.name.rsplit("_", 1)[1]), "frames": len(joints), "joints": f"{stem}_joints.npy",
+                "features": f"{stem}_features.npy", "video": exports.get("mp4", exports.get("gif")),
+                "exports": exports, "mean_joint_speed": mean_joint_speed(measured, self.fps),
+                **asdict(measure(measured, self.fps)), **({"smoothing": smoothing} if smoothing else {}),
+                **(self.info["cleanup"][i] if "cleanup" in self.info else {}), **per_motion[i]}  # fmt: skip
+
+    def _measured(self, i: int) -> tuple[np.ndarray, dict | None]:
+        """Motion ``i`` as its measures read it (on the features' skeleton, smoothed and cleaned as the saved
+        joints were) and the smoothing report: vvMDM's smoothness before and after the filter."""
+        bridge = self.bridge or HMLBridge(self.representation, self.representation.skeleton)
+        measured = self.joints[i] if bridge.identity else bridge.joints(self.features[i])
+        sigma, smoothing = self.info.get("smooth_sigma"), None
+        if sigma:
+            raw = self.representation.decode_numpy(self.features[i]).astype(np.float32) if bridge.identity else measured
+            smoothed = smooth_joints(raw, float(sigma))
+            smoothing = {"sigma_frames": float(sigma), "measured_on": "HumanML3D features of the joints, as evaluate.py",
+                         "smoothness_before": smoothness_of_joints(raw, bridge.feature_skeleton),
+                         "smoothness_after": smoothness_of_joints(smoothed, bridge.feature_skeleton)}  # fmt: skip
+            measured = measured if bridge.identity else smoothed
+        cleanups = tuple(self.info.get("cleanups") or ())
+        if cleanups and not bridge.identity:
+            measured = apply_cleanups(measured, bridge.feature_skeleton, self.fps, cleanups)[0]
+        return measured, smoothing
+
+    def smoothed(self, sigma: float | None) -> MotionOutput:
+        """These motions through vvMDM's Gaussian filter over time (``sigma`` in frames; None or 0: unchanged)."""
+        if not sigma:
+            return self
+        joints = [smooth_joints(j, float(sigma)) for j in self.joints]
+        return replace(self, joints=joints, info={**self.info, "smooth_sigma": float(sigma), "joints_changed": True})
 
     def cleaned(self, *cleanups: str) -> MotionOutput:
         """These motions after the named clean-ups (``"bones"``: one fixed skeleton, so every exported file agrees
@@ -86,7 +135,7 @@ class MotionOutput:
         ``info["cleanup"]`` (one dict per motion)."""
         names = parse_cleanup(list(cleanups))
         done = [apply_cleanups(j, self.skeleton, self.fps, names) for j in self.joints]
-        info = {**self.info, "joints_changed": True, "cleanup": [report for _, report in done]}
+        info = {**self.info, "joints_changed": True, "cleanups": names, "cleanup": [report for _, report in done]}
         return replace(self, joints=[joints.astype(np.float32) for joints, _ in done], info=info)
 
     def to_bvh(self, i: int = 0) -> str:
