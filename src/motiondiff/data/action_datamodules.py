@@ -22,11 +22,9 @@ class _ActionClipDataModule(ClipDataModule):
 
     default_representation = "rp6jr"
 
-    def __init__(self, root: str | Path, batch_size: int = 64, num_workers: int = 0, max_frames: int = 60,
-                 min_frames: int = 16, seed: int = 0, representation: str | None = None, normalise: bool = True,
-                 bucketing: bool = False, bucket_chunk: int = 64):  # fmt: skip
-        super().__init__(batch_size, num_workers, max_frames, min_frames, 1, seed, representation,
-                         bucketing=bucketing, bucket_chunk=bucket_chunk)  # fmt: skip
+    def __init__(self, root: str | Path, max_frames: int = 60, normalise: bool = True, **options):
+        """``options``: ClipDataModule's and MotionDataModule's keywords."""
+        super().__init__(max_frames=max_frames, **options)
         self.root = Path(root)
         self.normalise = bool(normalise)
 

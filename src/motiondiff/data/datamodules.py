@@ -176,23 +176,10 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
 class ClipDataModule(MotionDataModule, abc.ABC):
     default_representation = "hml263"
 
-    def __init__(
-        self,
-        batch_size: int = 64,
-        num_workers: int = 0,
-        max_frames: int = 196,
-        min_frames: int = 16,
-        unit_length: int = 1,
-        seed: int = 0,
-        representation: str | None = None,
-        balance: float = 0.0,
-        window_min_frames: int | None = None,
-        bucketing: bool = False,
-        bucket_chunk: int = 64,
-        mirror: bool = False,
-    ):
-        super().__init__(batch_size, num_workers, max_frames, unit_length, seed, balance, window_min_frames, bucketing,
-                         bucket_chunk, mirror)  # fmt: skip
+    def __init__(self, min_frames: int = 16, representation: str | None = None, unit_length: int = 1, **options):
+        """``options``: MotionDataModule's keywords (batch size, workers, max_frames, seed, balance, windows,
+        bucketing, mirror), declared once there."""
+        super().__init__(unit_length=unit_length, **options)
         self.min_frames = min_frames
         self.representation_name = representation or self.default_representation
         if self.mirror and self.representation_name not in MIRRORED_REPRESENTATIONS:
@@ -290,25 +277,9 @@ class PreparedDataModule(ClipDataModule):
     representation is encoded from the stored joints and native rotations.
     """
 
-    def __init__(
-        self,
-        root: str | Path,
-        batch_size: int = 64,
-        num_workers: int = 0,
-        max_frames: int = 196,
-        min_frames: int = 16,
-        unit_length: int = 1,
-        seed: int = 0,
-        representation: str | None = None,
-        extra_train: list[str | Path] | None = None,
-        balance: float = 0.0,
-        window_min_frames: int | None = None,
-        bucketing: bool = False,
-        bucket_chunk: int = 64,
-        mirror: bool = False,
-    ):
-        super().__init__(batch_size, num_workers, max_frames, min_frames, unit_length, seed, representation, balance,
-                         window_min_frames, bucketing, bucket_chunk, mirror)  # fmt: skip
+    def __init__(self, root: str | Path, extra_train: list[str | Path] | None = None, **options):
+        """``options``: ClipDataModule's and MotionDataModule's keywords."""
+        super().__init__(**options)
         self.root = Path(root)
         self.meta: dict = {}
         self._prepared: dict[str, PreparedSplit] = {}
@@ -372,25 +343,10 @@ class BVHDataModule(PreparedDataModule):
     sources and options stay the same.
     """
 
-    def __init__(
-        self,
-        src: str | Path,
-        cache: str | Path,
-        labels: str | Path | None = None,
-        joint_map: str = "auto",
-        max_clip_frames: int | None = None,
-        batch_size: int = 64,
-        num_workers: int = 0,
-        max_frames: int = 196,
-        min_frames: int = 16,
-        seed: int = 0,
-        representation: str | None = None,
-        bucketing: bool = False,
-        bucket_chunk: int = 64,
-        up_axis: str = "auto",
-    ):
-        super().__init__(cache, batch_size, num_workers, max_frames, min_frames, 1, seed, representation,
-                         bucketing=bucketing, bucket_chunk=bucket_chunk)  # fmt: skip
+    def __init__(self, src: str | Path, cache: str | Path, labels: str | Path | None = None, joint_map: str = "auto",
+                 max_clip_frames: int | None = None, up_axis: str = "auto", **options):  # fmt: skip
+        """``options``: PreparedDataModule's keywords (batch size, max_frames, min_frames, representation, ...)."""
+        super().__init__(cache, **options)
         self.src, self.labels, self.joint_map_spec, self.max_clip_frames = src, labels, joint_map, max_clip_frames
         self.up_axis = up_axis
 

@@ -14,18 +14,9 @@ class OfficialLayoutDataModule(MotionDataModule):
 
     layout: OfficialLayout
 
-    def __init__(
-        self,
-        root: str | Path,
-        batch_size: int = 64,
-        num_workers: int = 0,
-        max_frames: int | None = None,
-        unit_length: int | None = None,
-        seed: int = 0,
-        representation: str | None = None,
-        bucketing: bool = False,
-        bucket_chunk: int = 64,
-    ):
+    def __init__(self, root: str | Path, max_frames: int | None = None, unit_length: int | None = None,
+                 representation: str | None = None, **options):  # fmt: skip
+        """``options``: MotionDataModule's keywords (batch size, workers, seed, bucketing, ...)."""
         native = "hml263" if self.layout.num_joints == 22 else "kit251"
         if representation not in (None, native):
             raise ValueError(
@@ -34,13 +25,9 @@ class OfficialLayoutDataModule(MotionDataModule):
                 "position representations need a dataset with rotations (humanact12, uestc, bandai, bvh)"
             )
         super().__init__(
-            batch_size=batch_size,
-            num_workers=num_workers,
             max_frames=self.layout.max_motion_len if max_frames is None else max_frames,
             unit_length=self.layout.unit_length if unit_length is None else unit_length,
-            seed=seed,
-            bucketing=bucketing,
-            bucket_chunk=bucket_chunk,
+            **options,
         )
         self.root = Path(root)
 

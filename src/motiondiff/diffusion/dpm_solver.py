@@ -26,16 +26,7 @@ import torch
 from tqdm.auto import tqdm
 
 from motiondiff.diffusion.process import GaussianDiffusion
-from motiondiff.diffusion.samplers import (
-    ClipX0,
-    ModelFn,
-    X0Guide,
-    X0Hook,
-    XtHook,
-    _initial_noise,
-    _predict_x0,
-    select_timesteps,
-)
+from motiondiff.diffusion.samplers import ModelFn, StepOptions, select_timesteps
 
 ORDERS = (1, 2, 3)
 
@@ -89,16 +80,7 @@ def dpmpp_sample(
     steps: int = 10,
     order: int = 2,
     spacing: str = "logsnr",
-    noise: torch.Tensor | None = None,
-    generator: torch.Generator | None = None,
-    x0_hook: X0Hook | None = None,
-    xt_hook: XtHook | None = None,
-    x0_guide: X0Guide | None = None,
-    clip_x0: ClipX0 = None,
-    progress: bool = False,
-    resample: int = 1,
-    device: torch.device | str | None = None,
-    dtype: torch.dtype | None = None,
+    **options,
 ) -> torch.Tensor:
     """DPM-Solver++ of ``order`` (1, 2: 2M, 3: 3M) on ``select_timesteps(T, steps, spacing)``: by default steps
     evenly spaced in log-SNR, the paper's choice for low-dimensional data (``uniform``: the steps DDIM takes).
@@ -108,10 +90,11 @@ def dpmpp_sample(
     gets each step's result with t_prev (−1 for the clean one). ``resample`` exists for a uniform signature: RePaint's
     resampling re-noises x_t, which the multistep history cannot follow, so only 1 is accepted.
     """
+    o = StepOptions(**options)
     if order not in ORDERS:
         raise ValueError(f"DPM-Solver++ order must be one of {list(ORDERS)}, got {order!r}")
-    if resample != 1:
-        raise ValueError(f"sampler dpmpp has no RePaint resampling (resample={resample}); use sampler=ddim for it")
+    if o.resample != 1:
+        raise ValueError(f"sampler dpmpp has no RePaint resampling (resample={o.resample}); use sampler=ddim for it")
     alpha_bar = diffusion.alphas_cumprod.tolist()
     kept = select_timesteps(diffusion.num_steps, steps, spacing, alpha_bar)
     # α, σ and λ of every kept step, then of the clean end (ᾱ = 1: σ = 0, λ = ∞): float64 on the host, read once
@@ -120,16 +103,15 @@ def dpmpp_sample(
     sigmas = [math.sqrt(1.0 - a) for a in levels]
     lambdas = [math.inf if s == 0.0 else math.log(a / s) for a, s in zip(alphas, sigmas, strict=True)]
     orders = _step_orders(len(kept), order)
-    x = _initial_noise(shape, noise, generator, device, dtype)
+    x = o.initial_noise(shape)
     batch = x.shape[0]
     history: list[torch.Tensor] = []
-    for j in tqdm(range(len(kept)), desc="DPM-Solver++", disable=not progress, leave=False):
+    for j in tqdm(range(len(kept)), desc="DPM-Solver++", disable=not o.progress, leave=False):
         i = len(kept) - 1 - j  # index into kept, from T−1 down to 0
         t = torch.full((batch,), kept[i], dtype=torch.long, device=x.device)
-        x0 = _predict_x0(diffusion, model_fn, x, t, t, clip_x0, x0_hook, kept[i], x0_guide, alpha_bar[kept[i]])
+        x0 = o.predict_x0(diffusion, model_fn, x, t, t, kept[i], alpha_bar[kept[i]])
         history = [*history[-2:], x0]
         ratio = sigmas[j + 1] / sigmas[j]
         x = _update(x, history, lambdas[max(0, j - 2) : j + 1], lambdas[j + 1], alphas[j + 1], ratio, orders[j])
-        if xt_hook is not None:
-            x = xt_hook(x, kept[i - 1] if i > 0 else -1)
+        x = o.after_step(x, kept[i - 1] if i > 0 else -1)
     return x

@@ -214,14 +214,8 @@ class GaussianDiffusion:
         err = (self.target(x0, noise, t) - model_output) ** 2
         return self.loss_weight(t, err.dtype) * masked_mean_per_sample(err, mask)
 
-    def loss(
-        self,
-        model_output: torch.Tensor,
-        x0: torch.Tensor,
-        noise: torch.Tensor,
-        t: torch.Tensor,
-        mask: torch.Tensor | None = None,
-    ) -> torch.Tensor:
+    def loss(self, model_output: torch.Tensor, x0: torch.Tensor, noise: torch.Tensor, t: torch.Tensor,
+             mask: torch.Tensor | None = None) -> torch.Tensor:  # fmt: skip
         """Weighted MSE: per sample the mean over its valid elements (frames where ``mask`` (B, N) is True, all
         features), times w(t); then the plain mean over the batch (every sample counts once, whatever its length)."""
         return self.loss_per_sample(model_output, x0, noise, t, mask).mean()

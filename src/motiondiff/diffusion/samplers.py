@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import torch
 from tqdm.auto import tqdm
@@ -32,6 +33,34 @@ ClipX0 = float | Callable[[torch.Tensor], torch.Tensor] | None
 
 
 SPACINGS = ("uniform", "logsnr")
+
+
+@dataclass(frozen=True)
+class StepOptions:
+    """What every sampler takes besides its own schedule, declared once: the start (``noise`` is x_T, else drawn from
+    ``generator`` on ``device``/``dtype``), the hooks that shape each step (see the module docstring), RePaint's
+    ``resample`` and a progress bar. The samplers take these as keywords (``ddim_sample(..., generator=g)``)."""
+
+    noise: torch.Tensor | None = None
+    generator: torch.Generator | None = None
+    x0_hook: X0Hook | None = None
+    xt_hook: XtHook | None = None
+    x0_guide: X0Guide | None = None
+    clip_x0: ClipX0 = None
+    progress: bool = False
+    resample: int = 1
+    device: torch.device | str | None = None
+    dtype: torch.dtype | None = None
+
+    def initial_noise(self, shape: Sequence[int]) -> torch.Tensor:
+        return _initial_noise(shape, self.noise, self.generator, self.device, self.dtype)
+
+    def predict_x0(self, diffusion, model_fn, x, t_model, t_proc, t_index: int, alpha_bar_t: float) -> torch.Tensor:
+        return _predict_x0(diffusion, model_fn, x, t_model, t_proc, self.clip_x0, self.x0_hook, t_index,
+                           self.x0_guide, alpha_bar_t)  # fmt: skip
+
+    def after_step(self, x: torch.Tensor, t_prev: int) -> torch.Tensor:
+        return x if self.xt_hook is None else self.xt_hook(x, t_prev)
 
 
 def select_timesteps(
@@ -121,49 +150,35 @@ def _predict_x0(
 
 @torch.inference_mode()
 def ddpm_sample(
-    diffusion: GaussianDiffusion,
-    model_fn: ModelFn,
-    shape: Sequence[int],
-    *,
-    noise: torch.Tensor | None = None,
-    generator: torch.Generator | None = None,
-    x0_hook: X0Hook | None = None,
-    xt_hook: XtHook | None = None,
-    x0_guide: X0Guide | None = None,
-    clip_x0: ClipX0 = None,
-    progress: bool = False,
-    steps: int | None = None,
-    resample: int = 1,
-    device: torch.device | str | None = None,
-    dtype: torch.dtype | None = None,
+    diffusion: GaussianDiffusion, model_fn: ModelFn, shape: Sequence[int], *, steps: int | None = None, **options
 ) -> torch.Tensor:
     """Ancestral sampling (Ho et al. 2020; MDM): x̂0 = to_x0(model_fn(x_t, t)), then x_{t−1} ~ q(x_{t−1} | x_t, x̂0).
 
     ``steps=S < T`` samples the respaced process (``GaussianDiffusion.respace`` on ``select_timesteps``).
     ``noise`` is x_T (else drawn from ``generator``); the last step adds no noise, so the result is the last x̂0.
     """
+    o = StepOptions(**options)
     kept = select_timesteps(diffusion.num_steps, steps)
-    resample = _check_resample(resample)
+    resample, generator = _check_resample(o.resample), o.generator
     proc = diffusion if len(kept) == diffusion.num_steps else diffusion.respace(kept)
     alpha_bar = proc.alphas_cumprod.tolist()  # indexed like t_proc
-    x = _initial_noise(shape, noise, generator, device, dtype)
+    x = o.initial_noise(shape)
     batch = x.shape[0]
-    for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDPM", disable=not progress, leave=False):
+    for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDPM", disable=not o.progress, leave=False):
         t_model = torch.full((batch,), kept[i], dtype=torch.long, device=x.device)
         t_proc = t_model if proc is diffusion else torch.full((batch,), i, dtype=torch.long, device=x.device)
         i_proc = kept[i] if proc is diffusion else i
         for u in range(resample if i > 0 else 1):
             if u > 0:
                 x = renoise_step(x, alpha_bar[i_proc], alpha_bar[i_proc - 1], generator)
-            x0 = _predict_x0(proc, model_fn, x, t_model, t_proc, clip_x0, x0_hook, kept[i], x0_guide, alpha_bar[i_proc])
+            x0 = o.predict_x0(proc, model_fn, x, t_model, t_proc, kept[i], alpha_bar[i_proc])
             mean, _, log_var = proc.q_posterior(x0, x, t_proc)
             if i == 0:
                 x = mean
             else:
                 z = torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
                 x = mean + (0.5 * log_var).exp() * z
-            if xt_hook is not None:
-                x = xt_hook(x, kept[i - 1] if i > 0 else -1)
+            x = o.after_step(x, kept[i - 1] if i > 0 else -1)
     return x
 
 
@@ -181,44 +196,30 @@ def ddim_coefficients(alpha_bar: float, alpha_bar_prev: float, eta: float) -> tu
 
 @torch.inference_mode()
 def ddim_sample(
-    diffusion: GaussianDiffusion,
-    model_fn: ModelFn,
-    shape: Sequence[int],
-    *,
-    steps: int = 50,
-    eta: float = 0.0,
-    noise: torch.Tensor | None = None,
-    generator: torch.Generator | None = None,
-    x0_hook: X0Hook | None = None,
-    xt_hook: XtHook | None = None,
-    x0_guide: X0Guide | None = None,
-    clip_x0: ClipX0 = None,
-    progress: bool = False,
-    resample: int = 1,
-    device: torch.device | str | None = None,
-    dtype: torch.dtype | None = None,
+    diffusion: GaussianDiffusion, model_fn: ModelFn, shape: Sequence[int], *, steps: int = 50, eta: float = 0.0,
+    **options,
 ) -> torch.Tensor:
     """DDIM on ``select_timesteps(T, steps)`` from T−1 down to 0; η = 0 is deterministic, η = 1 is DDPM-like.
 
     ε̂ is recomputed from the (clipped, hooked) x̂0, so edits made in ``x0_hook`` carry into the next x_t.
     The step from t = 0 goes to ᾱ_prev = 1, i.e. returns x̂0.
     """
+    o = StepOptions(**options)
     kept = select_timesteps(diffusion.num_steps, steps)
-    resample = _check_resample(resample)
+    resample, generator = _check_resample(o.resample), o.generator
     alpha_bar = diffusion.alphas_cumprod.tolist()
-    x = _initial_noise(shape, noise, generator, device, dtype)
+    x = o.initial_noise(shape)
     batch = x.shape[0]
-    for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDIM", disable=not progress, leave=False):
+    for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDIM", disable=not o.progress, leave=False):
         t = torch.full((batch,), kept[i], dtype=torch.long, device=x.device)
         c_x0, c_eps, sigma = ddim_coefficients(alpha_bar[kept[i]], alpha_bar[kept[i - 1]] if i > 0 else 1.0, eta)
         for u in range(resample if i > 0 else 1):
             if u > 0:
                 x = renoise_step(x, alpha_bar[kept[i]], alpha_bar[kept[i - 1]], generator)
-            x0 = _predict_x0(diffusion, model_fn, x, t, t, clip_x0, x0_hook, kept[i], x0_guide, alpha_bar[kept[i]])
+            x0 = o.predict_x0(diffusion, model_fn, x, t, t, kept[i], alpha_bar[kept[i]])
             eps = diffusion.eps_from_x0(x0, x, t)
             x = c_x0 * x0 + c_eps * eps
             if sigma > 0:
                 x = x + sigma * torch.randn(x.shape, generator=generator, device=x.device, dtype=x.dtype)
-            if xt_hook is not None:
-                x = xt_hook(x, kept[i - 1] if i > 0 else -1)
+            x = o.after_step(x, kept[i - 1] if i > 0 else -1)
     return x

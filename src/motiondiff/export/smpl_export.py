@@ -72,20 +72,11 @@ def check_smpl_skeleton(
     )
 
 
-def export_smpl(
-    path: str | os.PathLike,
-    joints: np.ndarray,
-    skeleton: Skeleton,
-    fps: float,
-    *,
-    rotations: np.ndarray | None = None,
-    root: np.ndarray | None = None,
-    offsets: np.ndarray | None = None,
-) -> ExportReport:
+def export_smpl(path: str | os.PathLike, joints: np.ndarray, skeleton: Skeleton, fps: float, **pose) -> ExportReport:
     """Write joints (N, J, 3) (metres, y up) of a SMPL-22 or SMPL-24 skeleton as SMPL parameters to `path` (.npz):
-    the arrays of `smpl_parameters` (which see for `rotations`, `root`, `offsets`). The report's error is
+    the arrays of `smpl_parameters` (``pose``: its `rotations`, `root`, `offsets`). The report's error is
     |FK(file) - joints| (metres) over frames and joints. Written atomically."""
-    data, distance, method = smpl_parameters(joints, skeleton, fps, rotations=rotations, root=root, offsets=offsets)
+    data, distance, method = smpl_parameters(joints, skeleton, fps, **pose)
     atomic_write(path, lambda tmp: np.savez(tmp, **data), suffix=".npz")
     return ExportReport(Path(path), float(distance.max()), float(distance.mean()), len(data["poses"]), method)
 

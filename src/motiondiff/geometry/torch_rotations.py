@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import torch
 
+from motiondiff.geometry.quaternion_algebra import hamilton, matrix_entries
+
 _EPS = 1e-12
 
 
@@ -32,17 +34,7 @@ def qnormalize(q: torch.Tensor) -> torch.Tensor:
 
 def qmul(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     """Hamilton product a * b (apply b first, then a)."""
-    aw, ax, ay, az = a.unbind(-1)
-    bw, bx, by, bz = b.unbind(-1)
-    return torch.stack(
-        [
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ],
-        dim=-1,
-    )
+    return torch.stack(hamilton(a.unbind(-1), b.unbind(-1)), dim=-1)
 
 
 def qinv(q: torch.Tensor) -> torch.Tensor:
@@ -60,16 +52,7 @@ def qrot(q: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
 
 
 def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
-    w, x, y, z = qnormalize(q).unbind(-1)
-    m = torch.stack(
-        [
-            1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-            2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-            2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
-        ],
-        dim=-1,
-    )  # fmt: skip
-    return m.reshape(q.shape[:-1] + (3, 3))
+    return torch.stack(matrix_entries(qnormalize(q).unbind(-1)), dim=-1).reshape(q.shape[:-1] + (3, 3))
 
 
 def matrix_to_quat(m: torch.Tensor) -> torch.Tensor:

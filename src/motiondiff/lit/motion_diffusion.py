@@ -234,23 +234,14 @@ class MotionDiffusion(torch.nn.Module):
             fn = guided_model_fn(self.denoiser, cond, guidance, mask=mask, **extra)
         shape = (b, n, self.hparams.feature_dim)
         clip = make_threshold(self.clip_rule, self.x0_low, self.x0_high, mask=mask)
+        options = dict(generator=generator, x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress,
+                       resample=resample, device=self.device, clip_x0=clip)  # fmt: skip
         if sampler == "ddim":
-            return ddim_sample(
-                self.diffusion, fn, shape, steps=steps or SAMPLER_STEPS["ddim"], eta=eta, generator=generator,
-                x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress, resample=resample,
-                device=self.device, clip_x0=clip,
-            )  # fmt: skip
+            return ddim_sample(self.diffusion, fn, shape, steps=steps or SAMPLER_STEPS["ddim"], eta=eta, **options)
         if sampler == "ddpm":
-            return ddpm_sample(
-                self.diffusion, fn, shape, steps=steps, generator=generator, x0_hook=x0_hook, xt_hook=xt_hook,
-                x0_guide=x0_guide, progress=progress, resample=resample, device=self.device, clip_x0=clip,
-            )  # fmt: skip
+            return ddpm_sample(self.diffusion, fn, shape, steps=steps, **options)
         if sampler == "dpmpp":  # DPM-Solver++(2M); eta is unused (the solver is deterministic)
-            return dpmpp_sample(
-                self.diffusion, fn, shape, steps=steps or SAMPLER_STEPS["dpmpp"], generator=generator,
-                x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress, resample=resample,
-                device=self.device, clip_x0=clip,
-            )  # fmt: skip
+            return dpmpp_sample(self.diffusion, fn, shape, steps=steps or SAMPLER_STEPS["dpmpp"], **options)
         raise ValueError(f"unknown sampler {sampler!r}; choose one of {', '.join(SAMPLER_STEPS)}")
 
     def set_clip_rule(self, rule: str | None) -> None:
