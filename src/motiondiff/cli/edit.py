@@ -4,6 +4,8 @@ edited joints, features, the input, stick-figure videos and results.json with ho
 
 from __future__ import annotations
 
+import sys
+import warnings
 from pathlib import Path
 
 from hydra.core.hydra_config import HydraConfig
@@ -12,16 +14,15 @@ from omegaconf import DictConfig, ListConfig
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps
 from motiondiff.cli.outputs import cleanup_option, export_formats
 from motiondiff.cli.validate import RULES_EDIT, check
-from motiondiff.edit.api import edit_parts, inbetween
 from motiondiff.edit.cleanups import check_for_edit
 from motiondiff.edit.inputs import clip_data_root, load_input_motion, read_bvh_input
 from motiondiff.edit.masks import EditError, frames_from_seconds
-from motiondiff.edit.saving import save_edits
 from motiondiff.export.outputs import check_formats_for
 from motiondiff.lit.conditions import check_action
-from motiondiff.lit.generation import check_num_samples, feed_forward_shape, sampling_precision
+from motiondiff.lit.generation import check_num_samples, feed_forward_shape
 from motiondiff.model_files.loading import load_model as load_module
-from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.pipelines import MotionPipeline
+from motiondiff.pipelines.coverage import PromptCoverageWarning
 from motiondiff.runtime.hardware import inference_precision, resolve_device
 from motiondiff.runtime.prompt_text import check_text
 
@@ -74,8 +75,6 @@ def _check(cfg: DictConfig, module) -> int | None:
         )
     if cfg.kind not in KINDS:
         raise UsageError(f"unknown kind {cfg.kind!r}; choose from {', '.join(KINDS)}")
-    if cfg.num_samples < 1:
-        raise UsageError(f"num_samples must be at least 1, got {cfg.num_samples}")
     apply_clip_x0(cfg, module)
     return sampling_steps(cfg, module)
 
@@ -109,24 +108,29 @@ def run(cfg: DictConfig) -> Path:
         if motion.window != (0, motion.total_frames):
             print(f"editing frames {motion.window[0]}..{motion.window[1]} of the input's {motion.total_frames} "
                   f"(the model's maximum is {module.hparams.max_frames}; choose the window with start=/length=)")  # fmt: skip
-        sampling = {"mode": cfg.mode, "num_samples": int(cfg.num_samples), "guidance": cfg.guidance,
-                    "sampler": cfg.sampler.name, "steps": steps, "eta": float(cfg.sampler.eta), "seed": int(cfg.seed),
-                    "resample": int(cfg.resample), "hold_from": cfg.hold_from,
+        sampling = {"mode": cfg.mode, "guidance": cfg.guidance, "sampler": cfg.sampler.name, "steps": steps,
+                    "eta": float(cfg.sampler.eta), "resample": int(cfg.resample), "hold_from": cfg.hold_from,
                     "reconstruction": cfg.reconstruction, "progress": True}  # fmt: skip
         what = condition or "unconditioned"
         print(f"{cfg.kind} ({cfg.mode}) of {cfg.input} ({motion.num_frames} frames) x {cfg.num_samples}: {what!r}")
-        shape = feed_forward_shape(module, int(cfg.num_samples), int(module.hparams.max_frames))
-        with sampling_precision(module, inference_precision(cfg.get("precision", "auto"), cfg.device, shape)):
-            if cfg.kind == "inbetween":
-                result = inbetween(module, motion, condition, prefix=_kept(cfg, "prefix", fps),
-                                   suffix=_kept(cfg, "suffix", fps), close_root=bool(cfg.close_root),
-                                   boundary_blend=cfg.boundary_blend, **sampling)  # fmt: skip
-            else:
-                result = edit_parts(module, motion, _parts(cfg), condition, **sampling)
     except EditError as err:
         raise UsageError(str(err)) from None
+    shape = feed_forward_shape(module, int(cfg.num_samples), int(module.hparams.max_frames))
+    pipe = MotionPipeline(module, str(ckpt), inference_precision(cfg.get("precision", "auto"), cfg.device, shape))
+    n, seed = int(cfg.num_samples), int(cfg.seed)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PromptCoverageWarning)
+        if cfg.kind == "inbetween":
+            edited = pipe.inbetween(motion, condition, prefix=_kept(cfg, "prefix", fps), suffix=_kept(cfg, "suffix", fps),
+                                    num_samples=n, seed=seed, close_root=bool(cfg.close_root),
+                                    boundary_blend=cfg.boundary_blend, **sampling)  # fmt: skip
+        else:
+            edited = pipe.edit_parts(motion, condition, parts=_parts(cfg), num_samples=n, seed=seed, **sampling)
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
+    edited = edited.cleaned(*cleanup) if cleanup else edited
     out = Path(HydraConfig.get().runtime.output_dir)
-    rows = save_edits(out, result, motion, module, formats, condition, cleanup, cfg.get("bvh_names"))
+    result = edited.edit
     summary = {
         "checkpoint": str(ckpt),
         "input": {"source": str(cfg.input), "clip_id": motion.clip_id, "split": motion.split, "label": motion.label,
@@ -135,9 +139,8 @@ def run(cfg: DictConfig) -> Path:
         "condition": condition,
         "representation": module.representation.name,
         "settings": {**result.settings, "clip_x0": module.clip_rule},
-        "samples": rows,
     }  # fmt: skip
-    write_json(out / "results.json", finite_or_null(summary))  # an undefined measure: null
+    rows = edited.save(out, formats, cfg.get("bvh_names"), summary=summary)
     for r in rows:
         extra = (f"max boundary ratio {r['max_boundary_ratio']:.2f}" if result.kind == "inbetween"
                  else f"root-relative kept error {r['root_relative_kept_max_error_m']:.1e} m")  # fmt: skip

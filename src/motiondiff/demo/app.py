@@ -17,7 +17,7 @@ from pathlib import Path
 
 import gradio as gr
 
-from motiondiff.demo.models import MAX_SAMPLES, DemoModels, Sample, download_kinds, generate, glb_note
+from motiondiff.demo.models import MAX_SAMPLES, DemoModels, Sample, download_kinds, edit_parts, generate, glb_note
 from motiondiff.runtime.errors import UsageError
 
 log = logging.getLogger(__name__)
@@ -70,7 +70,8 @@ def build_demo(
                 gr.update(visible=is_action, choices=info.actions, value=info.actions[0] if info.actions else None),
                 gr.update(visible=info.kind == "guided"),
                 gr.update(maximum=info.max_seconds, value=min(info.max_seconds, seconds), info=limit),
-                gr.update(value=info.default_guidance))  # fmt: skip
+                gr.update(value=info.default_guidance),
+                gr.update(choices=info.parts, value=["upper_body"] if "upper_body" in info.parts else None))  # fmt: skip
 
     def on_generate(key, text, action, secs, guidance, seed, count, n_steps, weights, progress=gr.Progress()):  # noqa: B008 (Gradio's progress hook)
         kind = models.info(key).kind
@@ -82,17 +83,34 @@ def build_demo(
                                     num_samples=count, steps=n_steps, weights=weights)  # fmt: skip
         except UsageError as err:
             gr.Warning(str(err))
-            return [f"**Please fix:** {err}", *_hidden_slots()]
+            return [f"**Please fix:** {err}", None, *_hidden_slots()]
         except Exception as err:  # the page shows one line; the server log keeps the traceback
             log.exception("generation failed")
-            return [f"**Generation failed:** {type(err).__name__}: {err}", *_hidden_slots()]
+            return [f"**Generation failed:** {type(err).__name__}: {err}", None, *_hidden_slots()]
         settings = ", ".join(f"{k} {out.info[k]}" for k in ("sampler", "steps", "guidance", "seed") if k in out.info)
         local = out.info.get("local_actions")
         if local:
             settings += "; local actions: " + ", ".join(f"{a['text']} (weight {a['weight']:g})" for a in local)
         note = glb_note(models.glb, next((s.glb_error for s in samples if s.glb_error), None))
         far = "".join(f"**Warning:** {line}. " for line in out.info.get("coverage_warnings") or [])
-        return [f"{far}Generated {len(samples)} motion(s) with **{key}** ({settings}). {note}",
+        return [f"{far}Generated {len(samples)} motion(s) with **{key}** ({settings}). {note}", out,
+                *_slot_updates(samples)]  # fmt: skip
+
+    def on_edit(key, last, text, action, parts, guidance, seed, n_steps):
+        kind = models.info(key).kind
+        prompt = action if kind == "action" else text
+        try:
+            folder = Path(tempfile.mkdtemp(prefix="edit-", dir=root))
+            out, samples = edit_parts(models, key, last, prompt, parts, folder, seed=seed, steps=n_steps,
+                                      guidance=guidance)  # fmt: skip
+        except UsageError as err:
+            gr.Warning(str(err))
+            return [f"**Please fix:** {err}", last, *_hidden_slots()]
+        except Exception as err:
+            log.exception("edit failed")
+            return [f"**Edit failed:** {type(err).__name__}: {err}", last, *_hidden_slots()]
+        regenerated = ", ".join(parts if isinstance(parts, list) else [parts])
+        return [f"Regenerated **{regenerated}** of sample 1 from {prompt!r}; the rest of the body is kept.", out,
                 *_slot_updates(samples)]  # fmt: skip
 
     with gr.Blocks(title="motiondiff demo") as demo:
@@ -120,6 +138,15 @@ def build_demo(
                 with gr.Accordion("advanced", open=False):
                     n_steps = gr.Slider(1, 1000, value=steps, step=1, label="sampler steps (DDIM)", elem_id="steps")
         button = gr.Button("Generate", variant="primary", elem_id="generate")
+        last = gr.State(None)  # the motions on the page: what an edit starts from
+        with gr.Accordion("edit body parts of sample 1", open=False):
+            part_names = (
+                sorted(models.get(default).model.representation.skeleton.parts) if first.kind != "guided" else []
+            )
+            parts = gr.Dropdown(part_names, value=["upper_body"] if "upper_body" in part_names else None,
+                                multiselect=True, label="parts to regenerate (the rest of the body is kept)",
+                                elem_id="parts")  # fmt: skip
+            edit_button = gr.Button("Regenerate these parts from the prompt", elem_id="edit")
         status = gr.Markdown(glb_note(models.glb), elem_id="status")
         slots = []
         for i in range(MAX_SAMPLES):
@@ -131,8 +158,10 @@ def build_demo(
                     files = gr.File(label=f"downloads ({download_kinds(models.glb)})", file_count="multiple",
                                     elem_id=f"files-{i}", interactive=False)  # fmt: skip
             slots += [column, title, viewer, video, files]
-        model.change(on_model, model, [text, action, weights, secs, guidance])
+        model.change(on_model, model, [text, action, weights, secs, guidance, parts])
         inputs = [model, text, action, secs, guidance, seed, count, n_steps, weights]
-        button.click(on_generate, inputs, [status, *slots], concurrency_limit=1)
-        text.submit(on_generate, inputs, [status, *slots], concurrency_limit=1)
+        button.click(on_generate, inputs, [status, last, *slots], concurrency_limit=1)
+        text.submit(on_generate, inputs, [status, last, *slots], concurrency_limit=1)
+        edit_inputs = [model, last, text, action, parts, guidance, seed, n_steps]
+        edit_button.click(on_edit, edit_inputs, [status, last, *slots], concurrency_limit=1)
     return demo

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import subprocess
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -66,6 +66,7 @@ class ModelInfo:
     max_seconds: float
     default_guidance: float
     actions: list[str] = field(default_factory=list)
+    parts: list[str] = field(default_factory=list)  # the body-part presets an edit can regenerate (MDM models)
 
 
 @dataclass
@@ -136,7 +137,8 @@ class DemoModels:
             decoder = pipe.latent.decoder.hparams
             guidance = float((pipe.latent.hparams.sampling or {}).get("guidance", 7.5))  # the latent model's default
             return ModelInfo("guided", int(decoder.max_frames) / pipe.fps, guidance)
-        return ModelInfo(pipe.condition_kind, pipe.max_seconds, float(pipe.model.default_guidance), pipe.actions)
+        parts = sorted(pipe.model.representation.skeleton.parts)
+        return ModelInfo(pipe.condition_kind, pipe.max_seconds, float(pipe.model.default_guidance), pipe.actions, parts)
 
 
 def parse_weights(text: str | None) -> list[float] | None:
@@ -193,18 +195,51 @@ def generate(
             steps=steps,
             seed=seed,
         )  # the page's steps slider is DDIM's (GuidedMotion samples with DDIM too)
-    out_dir = Path(out_dir)
+    return out, _write_samples(models, out, Path(out_dir))
+
+
+def edit_parts(
+    models: DemoModels,
+    key: str,
+    motion: MotionOutput,
+    prompt: str | None,
+    parts,
+    out_dir: str | Path,
+    *,
+    seed: int = 0,
+    steps: int | None = None,
+    guidance: float | None = None,
+) -> tuple[MotionOutput, list[Sample]]:
+    """Regenerate ``parts`` of the first motion of ``motion`` from ``prompt`` and keep the rest of the body: ``parts``
+    names the parts that are REGENERATED, as ``edit.py parts=`` and ``MotionPipeline.edit_parts(parts=)`` do."""
+    pipe = models.get(key)
+    if isinstance(pipe, GuidedMotionPipeline):
+        raise UsageError("body-part editing needs an MDM model (text or action): choose one in the model list")
+    if motion is None:
+        raise UsageError("generate a motion first: the edit regenerates parts of sample 1")
+    if not parts:
+        raise UsageError(
+            f"choose the body parts to regenerate: {', '.join(sorted(pipe.model.representation.skeleton.parts))}"
+        )
+    seed = _whole(seed, "seed", 0, 2**63 - 1)
+    steps = None if steps in (None, "") else _whole(steps, "steps", 1, 10_000)
+    out = pipe.edit_parts(motion, prompt, parts=list(parts) if not isinstance(parts, str) else parts, seed=seed,
+                          sampler="ddim", steps=steps, guidance=guidance)  # fmt: skip
+    return out, _write_samples(models, replace(out, edit=None), Path(out_dir))
+
+
+def _write_samples(models: DemoModels, out: MotionOutput, out_dir: Path) -> list[Sample]:
+    """Each motion's viewer, MP4, BVH and NPZ (and GLB with Blender) under ``out_dir``, as the page offers them."""
     rows = out.save(out_dir, formats=["bvh", "mp4", "html"])
     samples = []
-    for row in rows:
-        i = row["index"]
+    for i, row in enumerate(rows):
         exports = row["exports"]
         npz = write_npz(Path(exports["bvh"]).with_suffix(".npz"), out.joints[i], out.features[i], out.fps)
         title = f"sample {i + 1}: {out.prompts[i] or 'unconditioned'}, {out.seconds(i):.1f} s at {out.fps:g} fps"
         glb, error = _glb(Path(exports["bvh"]), out.fps) if models.glb else (None, None)
         samples.append(Sample(i, title, Path(exports["html"]), Path(exports["mp4"]), Path(exports["bvh"]), npz, glb,
                               error))  # fmt: skip
-    return out, samples
+    return samples
 
 
 def _glb(bvh: Path, fps: float) -> tuple[Path | None, str | None]:

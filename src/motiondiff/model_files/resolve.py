@@ -51,6 +51,9 @@ def find_model(spec: str | Path, output_dir: str | Path | None = None, condition
     path = Path(key)
     if path.is_file():
         return path
+    if path.is_dir():
+        raise UsageError(f"checkpoint {path} is a folder, not a model file: pass checkpoint=<path to a .ckpt or "
+                         ".safetensors file>, checkpoint=shipped, checkpoint=latest or checkpoint=best")  # fmt: skip
     if "/" in key or path.suffix:  # meant as a file
         raise UsageError(f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt or .safetensors release>, "
                          f"checkpoint=shipped, checkpoint=latest, checkpoint=best or a released model's name "

@@ -12,6 +12,7 @@ fix; sampling goes through the one generation chain (`motiondiff.lit.generation`
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -201,11 +202,14 @@ class MotionPipeline:
         except (EditError, ValueError) as err:
             raise UsageError(str(err)) from None
         info = {"model": self.source, "input": source.source, **result.settings}
-        return self._output(
+        out = self._output(
             list(result.joints), list(result.features), [self._label(c) for c in result.conditions], info
         )
+        return replace(out, edit=result, source=source)
 
     def _input(self, motion, up_axis: str = "auto", smpl_model=None) -> InputMotion:
+        if isinstance(motion, InputMotion):  # already loaded (edit.load_input_motion: a window, a data root, ...)
+            return motion
         if isinstance(motion, MotionOutput):  # its own features, as made (canonical placement, any representation)
             if motion.representation.name != self.model.representation.name:
                 raise UsageError(f"this motion is in {motion.representation.name} features; the model edits "

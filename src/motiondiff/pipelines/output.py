@@ -12,8 +12,11 @@ import numpy as np
 from motiondiff.data.preparing.captions import measure
 from motiondiff.data.representations import Representation
 from motiondiff.data.representations.spec import HMLBridge
+from motiondiff.edit.api import EditResult
 from motiondiff.edit.cleanups import apply_cleanups, parse_cleanup
+from motiondiff.edit.inputs import InputMotion
 from motiondiff.edit.measures import mean_joint_speed
+from motiondiff.edit.saving import save_edits
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.export.naming import motion_stems
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
@@ -36,6 +39,9 @@ class MotionOutput:
     info: dict = field(default_factory=dict)  # how they were made (model, sampler, guidance, seed, edit settings)
     # the model's features -> the joints its measures read (SMPL-22/KIT-21; identity for hml263/kit251)
     bridge: HMLBridge | None = field(default=None, repr=False)
+    # an edit's details (kept frames or joints, the input): `save` then writes the input and how well each edit kept it
+    edit: EditResult | None = field(default=None, repr=False)
+    source: InputMotion | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.joints)
@@ -80,7 +86,10 @@ class MotionOutput:
         long = self.info.get("long_motion")  # one motion through several prompts: long_<prompts joined by "then">_<k>
         names = [" then ".join(str(s["label"]) for s in long["segments"])] * len(self) if long else self.prompts
         stems = motion_stems(names, "long_" if long else "")  # <prompt>_<k>, as the commands
-        rows = [self._save_one(folder / stem, i, formats, rig_names, body) for i, stem in enumerate(stems)]
+        if self.edit is not None:
+            rows = save_edits(folder, self, formats, rig_names)
+        else:
+            rows = [self._save_one(folder / stem, i, formats, rig_names, body) for i, stem in enumerate(stems)]
         doc = {**(summary or {}), "info": self.info, "samples": rows}
         write_json(folder / "results.json", finite_or_null(doc), default=str)
         return rows
@@ -134,7 +143,12 @@ class MotionOutput:
         with the joints; ``"feet"``: feet pinned during ground contacts), in that order; what each did is in
         ``info["cleanup"]`` (one dict per motion)."""
         names = parse_cleanup(list(cleanups))
-        done = [apply_cleanups(j, self.skeleton, self.fps, names) for j in self.joints]
+        kept = [
+            None if self.edit is None else self.edit.kept_points(i) for i in range(len(self))
+        ]  # an edit's kept part stays
+        done = [
+            apply_cleanups(j, self.skeleton, self.fps, names, keep=k) for j, k in zip(self.joints, kept, strict=True)
+        ]
         info = {**self.info, "joints_changed": True, "cleanups": names, "cleanup": [report for _, report in done]}
         return replace(self, joints=[joints.astype(np.float32) for joints, _ in done], info=info)
 

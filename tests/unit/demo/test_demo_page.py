@@ -18,18 +18,19 @@ def handlers(tmp_path_factory):
 
 
 def test_the_action_model_shows_its_actions_instead_of_the_prompt(handlers):
-    text, action, weights, seconds, guidance = handlers["on_model"]("action")
+    text, action, weights, seconds, guidance, parts = handlers["on_model"]("action")
     assert text["visible"] is False and action["visible"] is True and weights["visible"] is False
     assert "walk" in action["choices"] and action["value"] == "bow"
     assert seconds["maximum"] == 6.0 and guidance["value"] == 2.0  # the action model's limit and default
+    assert "upper_body" in parts["choices"] and parts["value"] == ["upper_body"]
 
 
 def test_an_unknown_action_is_a_status_line_with_the_fix(handlers):
-    status, column, *_ = handlers["on_generate"](
+    status, last, column, *_ = handlers["on_generate"](
         "action", "", "fly", 1.0, 2.0, 0, 1, 2, "", progress=lambda *a, **k: None
     )
     assert status.startswith("**Please fix:** unknown action 'fly'") and "walk" in status
-    assert column["visible"] is False
+    assert column["visible"] is False and last is None
 
 
 @pytest.mark.parametrize("blender", [False, True])
@@ -45,8 +46,26 @@ def test_the_status_and_downloads_say_whether_glb_is_there(monkeypatch, tmp_path
     monkeypatch.setattr(demo_models, "convert_bvh", fake_blender)
     demo = build_demo(DemoModels(), "action", seconds=1.0, steps=2, output_dir=tmp_path)
     on_generate = {f.name: f.fn for f in demo.fns.values()}["on_generate"]
-    status, column, _, _, video, files, *_ = on_generate("action", "", "walk", 0.5, 2.0, 0, 1, 2, "",
+    status, _, column, _, _, video, files, *_ = on_generate("action", "", "walk", 0.5, 2.0, 0, 1, 2, "",
                                                         progress=lambda *a, **k: None)  # fmt: skip
     assert column["visible"] is True and video.endswith(".mp4")
     assert [f.rsplit(".", 1)[1] for f in files] == (["bvh", "glb", "npz"] if blender else ["bvh", "npz"])
     assert status.endswith(demo_models.GLB_INCLUDED if blender else demo_models.GLB_MISSING)
+
+
+def test_the_edit_regenerates_the_chosen_parts_and_keeps_the_rest(handlers):
+    """parts= names the REGENERATED parts on the page too (as edit.py and MotionPipeline.edit_parts): the legs of
+    sample 1 stay where they were, the arms move."""
+    import numpy as np
+
+    status, last, *_ = handlers["on_generate"]("action", "", "walk", 1.0, 2.0, 0, 1, 2, "",
+                                               progress=lambda *a, **k: None)  # fmt: skip
+    status, edited, column, *_ = handlers["on_edit"]("action", last, "", "wave-right-hand", ["upper_body"], 2.0, 1, 2)
+    assert status.startswith("Regenerated **upper_body** of sample 1") and column["visible"] is True
+    legs = list(last.skeleton.parts["lower_body"])
+    arms = [j for j in last.skeleton.parts["upper_body"] if j not in legs]
+    before, after = last.joints[0], edited.joints[0]
+    assert np.abs(after[:, legs] - before[:, legs]).max() < 1e-4
+    assert np.abs(after[:, arms] - before[:, arms]).max() > 1e-2
+    status, same, *_ = handlers["on_edit"]("action", None, "", "walk", ["upper_body"], 2.0, 0, 2)
+    assert status.startswith("**Please fix:** generate a motion first") and same is None
