@@ -27,6 +27,7 @@ from types import SimpleNamespace
 
 import torch
 
+from motiondiff.bench.flops import count_flops
 from motiondiff.bench.official_code import OfficialCode
 from motiondiff.bench.workloads import FEATURE_DIM, GUIDANCE, autocast, random_batch
 from motiondiff.models.denoiser import PRESETS
@@ -138,7 +139,6 @@ def forward(code: OfficialCode, preset: str | dict, batch: int, frames: int, gui
 
 def forward_flops(code: OfficialCode, preset: str | dict, batch: int, frames: int, guided: bool = False) -> int:
     """FLOPs of that forward, counted in train mode under no_grad as ``workloads.forward_flops`` counts ours."""
-    from motiondiff.bench.flops import count_flops
 
     model, net = _network(code, preset, guided, train=True)
     x, y = random_inputs(model, batch, frames)

@@ -8,6 +8,7 @@ import platform
 
 import torch
 
+from motiondiff.bench.compare import comparison_markdown
 from motiondiff.bench.timing import format_seconds
 from motiondiff.runtime.hardware import cpu_flags, cpu_has_fast_bf16, cpu_model
 
@@ -34,7 +35,6 @@ def flags_line(flags: dict[str, bool]) -> str:
 
 
 def markdown(result: dict) -> str:
-    from motiondiff.bench.compare import comparison_markdown
 
     m = result["machine"]
     lines = [

@@ -25,18 +25,21 @@ import torch
 from motiondiff.bench import workloads
 from motiondiff.bench.compare import comparison_table, params_and_notes, run_comparison
 from motiondiff.bench.flops import count_flops, matmul_flops_per_s
+from motiondiff.bench.official_code import load_official
 from motiondiff.bench.report import machine
 from motiondiff.bench.timing import PeakMemory, median_seconds
 from motiondiff.bench.workloads import TINY
+from motiondiff.lit.conditions import text_encoder_kwargs
 from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
+from motiondiff.model_files.loading import load_model as load_module
+from motiondiff.model_files.resolve import find_model
 from motiondiff.models.denoiser import PRESETS
+from motiondiff.runtime.paths import REPO_DIR
 
 
 def default_sampler() -> tuple[str, int | None]:
     """sample.py's default sampler and steps (conf/sample.yaml's defaults)."""
     from hydra import compose, initialize_config_dir
-
-    from motiondiff.runtime.paths import REPO_DIR
 
     with initialize_config_dir(str(REPO_DIR / "conf"), version_base="1.3"):
         cfg = compose("sample")
@@ -86,11 +89,6 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "", co
               official: str | None = None) -> dict:  # fmt: skip
     """Every row; ``official``: a local checkout of the official MDM code to compare with (checked and imported
     before anything is timed, so a bad path fails at once)."""
-    from motiondiff.bench.official_code import load_official
-    from motiondiff.lit.conditions import text_encoder_kwargs
-    from motiondiff.model_files.loading import load_model as load_module
-    from motiondiff.model_files.resolve import find_model
-    from motiondiff.runtime.paths import REPO_DIR
 
     start = time.perf_counter()
     code = load_official(official) if official else None

@@ -12,9 +12,16 @@ from collections.abc import Callable
 
 import torch
 
+from motiondiff.bench.flops import count_flops
 from motiondiff.diffusion import GaussianDiffusion, make_betas
+from motiondiff.diffusion.dpm_solver import dpmpp_sample
+from motiondiff.diffusion.guidance import classifier_free_guidance, guided_model_fn
+from motiondiff.diffusion.samplers import ddim_sample, ddpm_sample, select_timesteps
+from motiondiff.lit.conditions import condition_batch
 from motiondiff.models.bf16_inference import bf16_inference
 from motiondiff.models.denoiser import PRESETS, MDMDenoiser
+from motiondiff.text.cache import TextEmbeddingCache
+from motiondiff.text.encoders import build_text_encoder
 
 FEATURE_DIM = 263  # HumanML3D features
 COND_DIM = 384  # MiniLM sentence features (the project's default text encoder)
@@ -96,8 +103,6 @@ def forward(
 def forward_flops(preset: str | dict, batch: int, frames: int, guided: bool = False) -> int:
     """FLOPs of that forward (``guided``: of ``guided_forward``). Counted on the unfused path (train mode, no grad):
     PyTorch's FLOP counter does not see inside the fused inference kernels, which compute the same products."""
-    from motiondiff.bench.flops import count_flops
-    from motiondiff.diffusion.guidance import classifier_free_guidance
 
     model = build_denoiser(preset).train()
     data = random_batch(batch, frames)
@@ -112,7 +117,6 @@ def forward_flops(preset: str | dict, batch: int, frames: int, guided: bool = Fa
 def guided_forward(preset: str | dict, batch: int, frames: int, scale: float = GUIDANCE) -> Callable[[], torch.Tensor]:
     """The network work of one guided sampling step: classifier-free guidance as the samplers run it (one forward of
     the doubled [conditional; unconditional] batch, eval mode, inference_mode)."""
-    from motiondiff.diffusion.guidance import classifier_free_guidance
 
     model = build_denoiser(preset).eval()
     data = random_batch(batch, frames)
@@ -150,8 +154,6 @@ def sampling(module, count: int, frames: int, sampler: str, steps: int | None, g
     """``count`` motions of ``frames`` frames from PROMPT. Returns (run, steps_total, steps_run): when ``timed_steps``
     is below the chain's length the run stops after that many steps (the caller scales the time: every step of a
     chain costs the same forward), so DDPM-1000 at batch 32 fits the bench's time budget."""
-    from motiondiff.diffusion.samplers import select_timesteps
-    from motiondiff.lit.conditions import condition_batch
 
     cond = condition_batch(module, [PROMPT] * count)  # encoded once, then cached: not part of the timing
     lengths = torch.full((count,), frames)
@@ -173,9 +175,6 @@ def feature_sampling(preset: str | dict, frames: int, sampler: str, steps: int |
     guided loop (DDIM, DDPM or DPM-Solver++, cosine 1000-step process, x0 prediction, no x̂0 clipping; the denoiser
     in bf16 with ``bf16``, as sampling runs it: `bf16_inference`) without a checkpoint, to compare with the official code on the same sizes.
     Returns (run, steps_total, steps_run) as ``sampling`` does."""
-    from motiondiff.diffusion.dpm_solver import dpmpp_sample
-    from motiondiff.diffusion.guidance import guided_model_fn
-    from motiondiff.diffusion.samplers import ddim_sample, ddpm_sample, select_timesteps
 
     loops = {"ddim": ddim_sample, "ddpm": ddpm_sample, "dpmpp": dpmpp_sample}
     if sampler not in loops:
@@ -200,8 +199,6 @@ def feature_sampling(preset: str | dict, frames: int, sampler: str, steps: int |
 
 def text_encoding(encoder_kwargs: dict) -> tuple[Callable[[], object], Callable[[], object]]:
     """(encode one prompt with the encoder, look the same prompt up in a filled in-memory TextEmbeddingCache)."""
-    from motiondiff.text.cache import TextEmbeddingCache
-    from motiondiff.text.encoders import build_text_encoder
 
     encoder = build_text_encoder(**encoder_kwargs)
     cache = TextEmbeddingCache(encoder)

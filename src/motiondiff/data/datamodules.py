@@ -21,11 +21,14 @@ from motiondiff.data.formats.prepared import PreparedSplit
 from motiondiff.data.formats.prepared import load_split as load_prepared_split
 from motiondiff.data.loaders import motion_loader
 from motiondiff.data.mirror import with_mirrors
+from motiondiff.data.preparing.from_bvh import ensure_prepared_bvh
 from motiondiff.data.representations import Representation, get_representation
 from motiondiff.data.representations.clip import ClipSplit, LabelledClip
 from motiondiff.data.representations.hml_features import mean_std
 from motiondiff.data.representations.spec import HMLBridge, bridge_from_spec, representation_spec
 from motiondiff.geometry.skeleton import SMPL22
+from motiondiff.runtime.errors import DatasetNotFoundError
+from motiondiff.runtime.paths import REPO_DIR
 
 log = logging.getLogger(__name__)
 
@@ -352,9 +355,6 @@ class BVHDataModule(PreparedDataModule):
 
     def prepared(self, split: str) -> PreparedSplit:
         if not self._prepared:
-            from motiondiff.data.preparing.from_bvh import ensure_prepared_bvh
-            from motiondiff.runtime.errors import DatasetNotFoundError
-
             if not Path(self.src).exists():
                 raise DatasetNotFoundError(
                     self.src, dataset="bvh", how_to_get="any motion capture exported as BVH (100STYLE, Bandai, ...)",
@@ -367,6 +367,5 @@ class BVHDataModule(PreparedDataModule):
 
 def embedded_data_root() -> Path:
     """data/bandai_mini of the source checkout: the small real dataset the project ships."""
-    from motiondiff.runtime.paths import REPO_DIR
 
     return REPO_DIR / "data" / "bandai_mini"

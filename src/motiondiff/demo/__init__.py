@@ -14,7 +14,7 @@ def build_demo(*args, **kwargs):
     """The Gradio app (see `motiondiff.demo.app.build_demo`); Gradio is imported only when a page is built, with its
     usage analytics off (the demo sends nothing off the machine unless asked to share)."""
     os.environ.setdefault("GRADIO_ANALYTICS_ENABLED", "False")
-    from motiondiff.demo.app import build_demo as build
+    from motiondiff.demo.app import build_demo as build  # lazy: gradio (+2.9 s to import)
 
     return build(*args, **kwargs)
 

@@ -196,7 +196,12 @@ def ddim_coefficients(alpha_bar: float, alpha_bar_prev: float, eta: float) -> tu
 
 @torch.inference_mode()
 def ddim_sample(
-    diffusion: GaussianDiffusion, model_fn: ModelFn, shape: Sequence[int], *, steps: int = 50, eta: float = 0.0,
+    diffusion: GaussianDiffusion,
+    model_fn: ModelFn,
+    shape: Sequence[int],
+    *,
+    steps: int = 50,
+    eta: float = 0.0,
     **options,
 ) -> torch.Tensor:
     """DDIM on ``select_timesteps(T, steps)`` from T−1 down to 0; η = 0 is deterministic, η = 1 is DDPM-like.

@@ -26,8 +26,8 @@ from motiondiff.edit.inputs import InputMotion
 from motiondiff.edit.masks import EditError, frame_keep, resolve_joints, to_frames
 from motiondiff.edit.trajectory import close_root_path, needs_root_closure
 from motiondiff.geometry.skeleton import Skeleton
-from motiondiff.lit.conditions import check_action
-from motiondiff.lit.generation import check_finite_output
+from motiondiff.lit.conditions import check_action, condition_batch
+from motiondiff.lit.generation import SAMPLE_BATCH, check_finite_output
 
 
 @dataclass
@@ -109,7 +109,6 @@ def _generator(module, generator: torch.Generator | None, seed: int | None) -> t
 def _inpaint_motions(module, motions, keeps, conds, num_samples, options, generator, progress) -> list[np.ndarray]:
     """De-normalised features of num_samples edits per motion (SAMPLE_BATCH edits at a time, padded), the input's
     features exact where ``keeps[m]`` (N, D, bool)."""
-    from motiondiff.lit.generation import SAMPLE_BATCH
 
     order = [m for m in range(len(motions)) for _ in range(num_samples)]
     out = []
@@ -119,7 +118,6 @@ def _inpaint_motions(module, motions, keeps, conds, num_samples, options, genera
 
 
 def _inpaint_batch(module, motions, keeps, conds, order, options, generator, progress) -> list[np.ndarray]:
-    from motiondiff.lit.conditions import condition_batch
 
     knowns = [m.features for m in motions]
     lengths = torch.tensor([len(knowns[m]) for m in order])

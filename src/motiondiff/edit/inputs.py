@@ -14,12 +14,19 @@ from pathlib import Path
 import numpy as np
 from omegaconf import OmegaConf
 
-from motiondiff.data.formats.up_axis import UpAxis, detect_up_axis, parse_up_axis, undecided
+from motiondiff.data.formats.array_bounds import check_array_file
+from motiondiff.data.formats.bvh import BVHError, read_bvh
+from motiondiff.data.formats.joint_map import JointMap
+from motiondiff.data.formats.prepared import SPLITS, load_split
+from motiondiff.data.formats.smpl_params import SmplParamsError, is_smpl_params, load_smpl_body, read_smpl_params
+from motiondiff.data.formats.up_axis import UpAxis, bvh_up_axis, detect_up_axis, parse_up_axis, undecided
+from motiondiff.data.preparing.processing import TARGET_FPS, ClipError, process_motion
 from motiondiff.data.representations import Representation
 from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face, skeleton_for_dim
 from motiondiff.edit.canonical import carries_placement, placement, to_canonical
 from motiondiff.edit.masks import EditError
+from motiondiff.geometry.rotations import qrot
 from motiondiff.geometry.skeleton import Skeleton, get_skeleton
 from motiondiff.runtime.paths import REPO_DIR, work_dir
 
@@ -128,7 +135,6 @@ def _dataset_window(module, features: np.ndarray, source: str, start: int, frame
 def dataset_motions(module, split: str = "test", data_root=None, frames: int | None = None) -> list[InputMotion]:
     """Every clip of a prepared dataset's split (default: the model's training data) with at least
     MIN_INPUT_FRAMES frames, as input motions (each cut to the model's maximum length, or ``frames``)."""
-    from motiondiff.data.formats.prepared import load_split
 
     root = Path(data_root) if data_root is not None else training_data_root(module)
     if root is None or not (root / "meta.json").is_file():
@@ -235,7 +241,6 @@ def _npy_features(path: Path, module, start: int, frames: int | None, up_axis: s
 def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
     """Rig joints moved rigidly as `prepare` placed the native skeleton: lowest joint on the floor, frame 0's root
     at the x/z origin facing +Z (as given when the skeleton has no facing joints)."""
-    from motiondiff.geometry.rotations import qrot
 
     if skeleton.face_joints is None:
         return joints
@@ -245,7 +250,6 @@ def place_like_dataset(joints: np.ndarray, skeleton: Skeleton) -> np.ndarray:
 
 def _check_array_sizes(path: Path) -> None:
     """EditError for a .npy/.npz whose arrays would take more than MAX_ARRAY_BYTES (read from its headers)."""
-    from motiondiff.data.formats.array_bounds import check_array_file
 
     try:
         check_array_file(path)
@@ -254,7 +258,6 @@ def _check_array_sizes(path: Path) -> None:
 
 
 def _holds_smpl_params(path: Path) -> bool:
-    from motiondiff.data.formats.smpl_params import is_smpl_params
 
     if path.suffix.lower() != ".npz":
         return False
@@ -277,8 +280,6 @@ def read_bvh_input(source: str | os.PathLike):
 def _read_motion(path: Path, smpl_model) -> tuple[object, float | None]:
     """A BVH file, or an SMPL parameter file's body joints, as a BVHMotion; with its units when they are known
     (SMPL: metres; a BVH's are guessed from its skeleton)."""
-    from motiondiff.data.formats.bvh import BVHError, read_bvh
-    from motiondiff.data.formats.smpl_params import SmplParamsError, load_smpl_body, read_smpl_params
 
     try:
         if path.suffix.lower() == ".bvh":
@@ -291,8 +292,6 @@ def _read_motion(path: Path, smpl_model) -> tuple[object, float | None]:
 def _bvh_features(path: Path, motion, units, module, start: int, frames: int | None, up_axis: str = "auto"):
     """Features of a window of a BVH-like motion (a BVH file, SMPL parameters), turned to Y-up (`bvh_up_axis`),
     then prepared exactly as `prepare` prepares a clip cut to a window."""
-    from motiondiff.data.formats.up_axis import bvh_up_axis
-    from motiondiff.data.preparing.processing import TARGET_FPS, ClipError, process_motion
 
     rep: Representation = module.representation
     target = feature_skeleton(module)
@@ -330,7 +329,6 @@ def _bvh_features(path: Path, motion, units, module, start: int, frames: int | N
 def _bvh_joint_map(module, motion, path: Path, units: float | None = None):
     """The joint map the model's dataset was prepared with when the file has its joints, else one inferred from
     the joint names (as `prepare bvh --joint-map auto`; `units`: metres per file unit when known)."""
-    from motiondiff.data.formats.joint_map import JointMap
 
     spec = module.hparams.get("representation") or {}
     if spec.get("joint_map"):
@@ -404,7 +402,6 @@ def _official_captions(root: Path, clip_id: str) -> list[str]:
 
 
 def _prepared_clip(root: Path, split: str, clip_id: str, module) -> tuple[np.ndarray, dict]:
-    from motiondiff.data.formats.prepared import SPLITS, load_split
 
     if split and split not in SPLITS:
         raise EditError(f"unknown split {split!r} in {split}:{clip_id}; choose from {', '.join(SPLITS)}")

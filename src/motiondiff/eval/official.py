@@ -25,6 +25,7 @@ import torch
 
 from motiondiff.data.representations import JointPositions, RotationRepresentation
 from motiondiff.data.representations.hml_features import feature_slices
+from motiondiff.data.representations.spec import representation_from_spec
 from motiondiff.data.sources.smpl_clips import UP_TO_Y
 from motiondiff.eval.protocol import Evaluators, pad
 from motiondiff.geometry.rotations import quat_to_matrix
@@ -115,7 +116,6 @@ def official_evaluators(dataset: str, official_dir: str | Path, module, dm) -> E
 
 
 def _rig_representation(module):
-    from motiondiff.data.representations.spec import representation_from_spec
 
     rep = representation_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
     if not isinstance(rep, (RotationRepresentation, JointPositions)) or rep.skeleton.num_joints != 24:

@@ -24,8 +24,9 @@ import torch
 
 from motiondiff import metrics as M
 from motiondiff.data.datasets import MotionDataset
-from motiondiff.data.representations.hml_features import joints_from_features
+from motiondiff.data.representations.hml_features import features_from_joints, joints_from_features, skeleton_for_dim
 from motiondiff.data.representations.spec import bridge_from_spec
+from motiondiff.edit.smoothing import smooth_features
 from motiondiff.lit.generation import generate_features
 from motiondiff.model_files.evaluators import load_released
 from motiondiff.models.evaluators.networks import ActionClassifierGRU, TextMotionEvaluator, motion_input
@@ -257,7 +258,6 @@ def generate(
     """De-normalised generated features, one per condition (caption, action id or None), at the given lengths
     (`motiondiff.lit.generation.generate_features`), with vvMDM's temporal filter when `smooth_sigma` > 0 (HumanML3D
     or jp features; ``edit.smoothing.smooth_features``), so the metrics see what sample.py saves."""
-    from motiondiff.edit.smoothing import smooth_features
 
     feats = generate_features(module, conditions, lengths, batch_size, generator, progress, precision, **sampling)
     layout = getattr(getattr(module, "representation", None), "name", "hml263")
@@ -267,7 +267,6 @@ def generate(
 def time_reversed(features: np.ndarray, num_joints: int) -> np.ndarray:
     """The same clip played backwards, re-encoded (velocities and contacts recomputed): a motion every evaluator
     should tell apart from the original (walking forward becomes walking backward)."""
-    from motiondiff.data.representations.hml_features import features_from_joints, skeleton_for_dim
 
     joints = joints_from_features(features, num_joints)[::-1]
     return features_from_joints(np.ascontiguousarray(joints), skeleton_for_dim(features.shape[-1]))

@@ -18,6 +18,9 @@ from pathlib import Path
 
 import torch
 
+from motiondiff.edit.smoothing import smooth_joints
+from motiondiff.export.render import render_motion
+from motiondiff.lit.generation import fitted_steps, generate_features
 from motiondiff.runtime.errors import UsageError
 
 log = logging.getLogger(__name__)
@@ -99,9 +102,6 @@ class SampleVideos:
     def render(self, module, folder: Path, guidance: float, precision: str = "32-true") -> list[tuple[str, Path, str]]:
         """(tag, GIF path, caption) per condition: sampled with the seed, ``steps`` DDIM steps and the model's
         smoothing, rendered into ``folder``."""
-        from motiondiff.edit.smoothing import smooth_joints
-        from motiondiff.export.render import render_motion
-        from motiondiff.lit.generation import fitted_steps, generate_features
 
         conditions = self.conditions(module)
         fps = float(module.hparams.fps)

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
+from motiondiff.data.representations import RotationRepresentation  # torch: only when features are exported
 from motiondiff.export.rig_names import with_rig_names
 from motiondiff.geometry.inverse_kinematics import fit_rest_offsets, fit_rotations, solve_rotations
 from motiondiff.geometry.motion_checks import check_motion
@@ -126,7 +127,6 @@ def export_bvh_from_features(
     own rotations and root (no IK; `offsets` default to the rig's mean offsets), else the decoded joints through IK.
     The fit error is measured against the representation's own decoding. ``names``: a rig's bone names
     (export.rig_names: smpl, mixamo) instead of the skeleton's."""
-    from motiondiff.data.representations import RotationRepresentation  # torch: only when features are exported
 
     features = np.asarray(features, dtype=np.float64)
     if features.ndim != 2 or features.shape[1] != representation.dim or len(features) == 0:

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from motiondiff.data.representations import RotationRepresentation  # torch: only when features are exported
 from motiondiff.export.bvh_export import TWIST_HALF_LIFE_S, ExportReport
 from motiondiff.geometry.inverse_kinematics import fit_rest_offsets, fit_rotations
 from motiondiff.geometry.kinematics import forward_kinematics
@@ -129,7 +130,6 @@ def export_smpl_from_features(
 ) -> ExportReport:
     """De-normalised features (N, D) as SMPL parameters: a rotation representation's own rotations and root on its
     rig's mean offsets, else the decoded joints through IK."""
-    from motiondiff.data.representations import RotationRepresentation  # torch: only when features are exported
 
     check_smpl_skeleton(representation.skeleton)
     features = np.asarray(features, dtype=np.float64)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from motiondiff.geometry.kinematics import forward_kinematics, forward_kinematics_torch
 from motiondiff.geometry.rotations import (
     axis_angle_to_quat,
     kabsch,
@@ -34,6 +35,7 @@ from motiondiff.geometry.rotations import (
     quat_to_matrix,
 )
 from motiondiff.geometry.skeleton import Skeleton
+from motiondiff.geometry.torch_rotations import axis_angle_to_matrix
 
 __all__ = ["DEFAULT_TWIST_HALF_LIFE", "REFINE_ABOVE_M", "fit_rest_offsets", "fit_rotations", "refine_rotations",
            "solve_rotations"]  # fmt: skip
@@ -195,9 +197,6 @@ def refine_rotations(
     higher powers, which approach the smallest worst-case distance. Returns (rotations, offsets)."""
     import torch
 
-    from motiondiff.geometry.kinematics import forward_kinematics_torch
-    from motiondiff.geometry.torch_rotations import axis_angle_to_matrix
-
     positions, offsets = _check_positions(positions, skeleton, offsets)
     target = torch.as_tensor(positions)
     base = torch.as_tensor(quat_to_matrix(np.asarray(rotations, dtype=np.float64)))
@@ -245,7 +244,6 @@ def fit_rotations(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(rotations, root, offsets) reproducing `positions` on `skeleton`: `solve_rotations`, exact for rigid bones,
     then `refine_rotations` (rotations and bone lengths) where some joint is more than `refine_above` metres off."""
-    from motiondiff.geometry.kinematics import forward_kinematics
 
     rotations, root = solve_rotations(positions, skeleton, offsets, twist_half_life=twist_half_life)
     translations = np.repeat(np.asarray(offsets, dtype=np.float64)[None], len(rotations), axis=0)

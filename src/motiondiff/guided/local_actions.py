@@ -14,7 +14,9 @@ from dataclasses import dataclass, field
 
 import torch
 
+from motiondiff.lit.generation import generate_features
 from motiondiff.models.graph import batch_graphs
+from motiondiff.text.graph_features import node_features
 from motiondiff.text.parse import ROLES, CaptionGraph, parse_caption
 
 
@@ -61,7 +63,6 @@ def generate_local_motions(
     generator: torch.Generator | None = None,
 ) -> list[list[torch.Tensor]]:
     """``candidates`` de-normalised motions (frames, D) per description from an MDM text model (DDIM)."""
-    from motiondiff.lit.generation import generate_features
 
     if mdm.condition_kind != "text":
         raise LocalActionError("local actions are generated from text: local_model must be a text-conditioned model")
@@ -142,7 +143,6 @@ def check_weights(weights: Sequence[float] | None, count: int) -> torch.Tensor:
 
 def graph_batch(latent, graph: CaptionGraph, encoder, copies: int = 1):
     """The GraphBatch of one caption, repeated ``copies`` times (node features from ``encoder``'s tokens)."""
-    from motiondiff.text.graph_features import node_features
 
     feats = node_features([graph], encoder)[0].float()
     return batch_graphs([graph] * copies, [feats] * copies, ROLES).to(latent.device)

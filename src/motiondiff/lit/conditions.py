@@ -10,6 +10,7 @@ import numpy as np
 import torch
 
 from motiondiff.runtime.errors import UsageError
+from motiondiff.text.encoders import build_text_encoder
 
 CLIP_PATH_ENV = "MOTIONDIFF_CLIP_PATH"  # the local CLIP folder of a model whose config names CLIP without one
 
@@ -90,7 +91,6 @@ def condition_batch(module, conditions: list):
 def prompt_features(module, prompts: list[str]) -> torch.Tensor:
     """The text encoder's features (P, E) of prompts, on the CPU; the encoder loads once and each prompt is encoded
     once per module (sampling and the coverage check share them)."""
-    from motiondiff.text.encoders import build_text_encoder
 
     if not hasattr(module, "_encoder"):
         module._encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))

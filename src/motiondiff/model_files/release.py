@@ -14,6 +14,8 @@ from pathlib import Path
 import torch
 from safetensors.torch import load_file, save_file
 
+from motiondiff.data.representations.spec import bridge_from_spec
+from motiondiff.lit.motion_diffusion import MotionDiffusion
 from motiondiff.model_files.release_checks import (
     FORMAT,
     LATENT_CLASS,
@@ -26,8 +28,10 @@ from motiondiff.model_files.release_checks import (
     sha256_of,
 )
 from motiondiff.runtime.atomic import atomic_write
-from motiondiff.runtime.checked_loading import check_finite_state, check_same_shapes, reading
+from motiondiff.runtime.checked_loading import check_finite_state, check_same_shapes, reading, torch_load
 from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.hardware import cpu_has_fast_bf16, cpu_model
+from motiondiff.runtime.provenance import git_state
 
 
 def save_release(module, path: str | Path, provenance: dict | None = None) -> tuple[Path, Path]:
@@ -51,8 +55,6 @@ def save_release(module, path: str | Path, provenance: dict | None = None) -> tu
 
 def load_release(path: str | Path, device: str = "cpu"):
     """The module of a release, in eval mode (strict: every tensor must match the architecture in the JSON)."""
-    from motiondiff.data.representations.spec import bridge_from_spec
-    from motiondiff.lit.motion_diffusion import MotionDiffusion
 
     weights, config = release_paths(path)
     meta, state = _checked_release(path, MODEL_CLASS)
@@ -72,7 +74,7 @@ def load_release(path: str | Path, device: str = "cpu"):
 
 def load_latent_release(path: str | Path, device: str = "cpu"):
     """GuidedMotion's latent model (with its three VAEs) from a release, in eval mode; strict like `load_release`."""
-    from motiondiff.lit.latent import HierarchicalLatentModule
+    from motiondiff.lit.latent import HierarchicalLatentModule  # lazy: lightning, spacy (+5.1 s to import)
 
     weights, config = release_paths(path)
     meta, state = _checked_release(path, LATENT_CLASS)
@@ -120,8 +122,6 @@ def cpu_description() -> str:
     """'<cores>-core <model name> (<fast instruction set>)' of this machine, for a model card."""
     import os
 
-    from motiondiff.runtime.hardware import cpu_has_fast_bf16, cpu_model
-
     isa = "native bf16" if cpu_has_fast_bf16() else torch.backends.cpu.get_cpu_capability() + ", no native bf16"
     return f"{os.cpu_count()}-core {cpu_model()} ({isa})"
 
@@ -130,10 +130,8 @@ def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple
     """Release a training checkpoint (a motion model, with its EMA weights when it trained with EMA, or a
     GuidedMotion latent model with its VAEs) with the training step, the run's
     command line and `provenance` (data, training time, machine, metrics) in the JSON."""
-    from motiondiff.lit.diffusion import MotionDiffusionModule
-    from motiondiff.lit.latent import HierarchicalLatentModule
-    from motiondiff.runtime.checked_loading import torch_load
-    from motiondiff.runtime.provenance import git_state
+    from motiondiff.lit.diffusion import MotionDiffusionModule  # lazy: lightning (+4.4 s to import)
+    from motiondiff.lit.latent import HierarchicalLatentModule  # lazy: lightning, spacy (+5.1 s to import)
 
     state = torch_load(ckpt)
     cls = HierarchicalLatentModule if "vaes" in (state.get("hyper_parameters") or {}) else MotionDiffusionModule

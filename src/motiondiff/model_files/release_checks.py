@@ -14,8 +14,12 @@ import math
 import re
 from pathlib import Path
 
+from motiondiff.lit.motion_diffusion import MotionDiffusion
 from motiondiff.model_files.resolve import RELEASE_SUFFIXES
+from motiondiff.models.hierarchical import LEVELS
+from motiondiff.runtime.checked_loading import reading
 from motiondiff.runtime.errors import UsageError
+from motiondiff.text.encoders import TEXT_ENCODERS
 
 FORMAT = "motiondiff-release-1"
 MODEL_CLASS = "MotionDiffusionModule"  # the class a release names (loaded as lit.motion_diffusion.MotionDiffusion)
@@ -48,8 +52,6 @@ def check_release_files(path: str | Path) -> dict:
     check_release_meta(meta, config, hparams=False)
     check_weights_checksum(weights, config, meta["weights_sha256"])
     from safetensors import safe_open  # numpy views: no torch
-
-    from motiondiff.runtime.checked_loading import reading
 
     with reading(weights, "release weights", RESTORE):
         with safe_open(str(weights), framework="numpy") as f:
@@ -138,7 +140,6 @@ def _keys_problem(unknown: list, missing: list, allowed) -> str:
 
 
 def _check_hparams(h: dict, where: str) -> None:
-    from motiondiff.lit.motion_diffusion import MotionDiffusion
 
     _check_keys(h, MotionDiffusion, where)
 
@@ -196,9 +197,8 @@ def _check_keys(h: dict, cls, where: str, prefix: str = "hparams") -> None:
 
 def _check_latent_hparams(h: dict, where: str) -> None:
     """A GuidedMotion latent release: its own keys, a VAE per level with finite normalisation, a named encoder."""
-    from motiondiff.lit.latent import HierarchicalLatentModule
-    from motiondiff.lit.vae import MotionVAEModule
-    from motiondiff.models.hierarchical import LEVELS
+    from motiondiff.lit.latent import HierarchicalLatentModule  # lazy: lightning, spacy (+5.1 s to import)
+    from motiondiff.lit.vae import MotionVAEModule  # lazy: lightning (+4.4 s to import)
 
     _check_keys(h, HierarchicalLatentModule, where)
 
@@ -229,7 +229,6 @@ def _check_latent_hparams(h: dict, where: str) -> None:
 
 
 def _check_text_encoder(encoder, kind: str, where: str) -> None:
-    from motiondiff.text.encoders import TEXT_ENCODERS
 
     if encoder is None:
         if kind == "text":

@@ -32,6 +32,7 @@ from motiondiff.model_files.resolve import find_model
 from motiondiff.models.hierarchical import LEVELS
 from motiondiff.pipelines.output import MotionOutput
 from motiondiff.runtime.errors import UsageError
+from motiondiff.text.encoders import build_text_encoder
 
 
 def level_steps_of(latent: HierarchicalLatentModule, level_steps=None) -> dict[str, int]:
@@ -127,7 +128,5 @@ class GuidedMotionPipeline:
 
     def _text_encoder(self):
         if self._encoder is None:
-            from motiondiff.text.encoders import build_text_encoder
-
             self._encoder = build_text_encoder(**text_encoder_kwargs(self.latent.hparams.text_encoder))
         return self._encoder

@@ -18,8 +18,10 @@ from motiondiff.edit.inputs import InputMotion
 from motiondiff.edit.measures import mean_joint_speed
 from motiondiff.edit.saving import save_edits
 from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
+from motiondiff.export.html_viewer import export_html
 from motiondiff.export.naming import motion_stems
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
+from motiondiff.export.render import render_motion
 from motiondiff.export.smpl_mesh import render_body
 from motiondiff.geometry.skeleton import Skeleton
 from motiondiff.runtime.atomic import finite_or_null, save_npy, write_json
@@ -161,7 +163,6 @@ class MotionOutput:
 
     def show(self, i: int = 0):
         """An interactive 3D view of motion ``i`` for a notebook (an IPython HTML object; its HTML in plain Python)."""
-        from motiondiff.export.html_viewer import export_html
 
         with tempfile.TemporaryDirectory() as tmp:
             html = export_html(Path(tmp) / "motion.html", self.joints[i], self.skeleton, self.fps,
@@ -175,7 +176,6 @@ class MotionOutput:
     def gif(self, i: int = 0, dpi: int = 60):
         """Motion ``i`` as an animated GIF for a notebook (an IPython Image; the GIF bytes in plain Python). Unlike
         ``show``'s interactive viewer, an image output stays in a saved notebook and shows on code hosts."""
-        from motiondiff.export.render import render_motion
 
         with tempfile.TemporaryDirectory() as tmp:
             data = render_motion(self.joints[i], self.skeleton, Path(tmp) / "motion.gif", title=self.prompts[i] or "",

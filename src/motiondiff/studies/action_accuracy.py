@@ -20,9 +20,15 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.eval import action_table, report
+from motiondiff.model_files.loading import load_model as load_module
+from motiondiff.model_files.resolve import find_model
+from motiondiff.pipelines.coverage import load_prompt_mapping
 from motiondiff.runtime.atomic import finite_or_null, write_json
-from motiondiff.runtime.paths import REPO_DIR
+from motiondiff.runtime.paths import REPO_DIR, work_dir
+from motiondiff.studies.behaviour import sampling_args
+from motiondiff.studies.config import study_config
 
 PARAPHRASES = REPO_DIR / "data" / "paraphrases" / "bandai_human.json"
 
@@ -40,7 +46,6 @@ def load_descriptions(spec: str) -> list[dict]:
 
 def action_lengths(data_root: Path, names: list[str], fps: float, max_frames: int) -> dict[str, int]:
     """Median frame count of each action's real training clips, within [2 s, the model's maximum]."""
-    from motiondiff.data.formats.prepared import load_split
 
     train = load_split(data_root, "train")
     lengths: dict[str, list[int]] = {}
@@ -53,7 +58,7 @@ def action_lengths(data_root: Path, names: list[str], fps: float, max_frames: in
 @torch.inference_mode()
 def measure(module, evaluators, items: list[dict], lengths: dict[str, int], n: int, seed: int, **sampling) -> dict:
     """Classifier verdicts for n samples of every description: {"asked": [...], "predicted": [...], ...}."""
-    from motiondiff.eval.protocol import generate
+    from motiondiff.eval.protocol import generate  # lazy: torchmetrics (+2.6 s to import)
 
     names = evaluators.action_names
     unknown = sorted({d["action"] for d in items} - set(names))
@@ -78,13 +83,7 @@ def summarise(result: dict) -> tuple[float, list[dict]]:
 def main(argv: list[str]) -> None:
     import os
 
-    from motiondiff.eval.protocol import Evaluators
-    from motiondiff.model_files.loading import load_model as load_module
-    from motiondiff.model_files.resolve import find_model
-    from motiondiff.pipelines.coverage import load_prompt_mapping
-    from motiondiff.runtime.paths import work_dir
-    from motiondiff.studies.behaviour import sampling_args
-    from motiondiff.studies.config import study_config
+    from motiondiff.eval.protocol import Evaluators  # lazy: torchmetrics (+2.6 s to import)
 
     cfg = study_config("action_accuracy", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))

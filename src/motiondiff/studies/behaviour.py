@@ -21,10 +21,18 @@ import numpy as np
 import torch
 from omegaconf import OmegaConf
 
+from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.preparing.captions import measure
 from motiondiff.edit.measures import mean_joint_acceleration, mean_joint_speed
+from motiondiff.edit.smoothing import smooth_features, smooth_joints
+from motiondiff.eval import action_table
+from motiondiff.lit.generation import fitted_steps, generate_features
+from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
+from motiondiff.model_files.loading import load_model as load_module
+from motiondiff.model_files.resolve import find_model
 from motiondiff.pipelines import MotionPipeline
-from motiondiff.runtime.paths import CONF_DIR
+from motiondiff.runtime.paths import CONF_DIR, REPO_DIR, work_dir
+from motiondiff.studies.config import study_config
 
 # prompt, seconds, dataset label of the real clips it should resemble
 DEFAULT_PROMPTS = (
@@ -50,7 +58,6 @@ def net_speed(joints: np.ndarray, fps: float) -> float:
 
 def speed_table(pipe: MotionPipeline, data_root, n: int, seed: int, **sampling) -> list[dict]:
     """Median net speed of n samples per speed prompt and length, and of the real train clips of its label."""
-    from motiondiff.data.formats.prepared import load_split
 
     train = load_split(data_root, "train")
     rows = []
@@ -140,9 +147,6 @@ def generate(
 def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tuple[list, list]:
     """A conditioned model's samples of its ∅ condition (classifier-free guidance's unconditional half), made and
     decoded as the pipeline makes its motions."""
-    from motiondiff.edit.smoothing import smooth_joints
-    from motiondiff.lit.generation import fitted_steps, generate_features
-    from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
 
     model = pipe.model
     frames = torch.full((n,), round(seconds * pipe.fps))
@@ -156,7 +160,6 @@ def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tupl
 
 def real_clips(root, label: str, max_frames: int, splits=("train", "val", "test")) -> list[np.ndarray]:
     """Canonical joints (first `max_frames`) of the real clips with this content label."""
-    from motiondiff.data.formats.prepared import load_split
 
     clips = []
     for split in splits:
@@ -183,7 +186,6 @@ def sampling_args(cfg) -> dict:
 def classify(evaluators, features: list[np.ndarray], smooth_sigma: float | None = None, layout: str = "hml263"):
     """The action classifier's label id for each clip of features, smoothed first as evaluate.py scores samples
     (``smooth_features``: the classifier reads the motion whose joints the report measures)."""
-    from motiondiff.edit.smoothing import smooth_features
 
     features = [smooth_features(f, smooth_sigma, layout) for f in features]
     return evaluators.embed_motion(features)["action_logits"].argmax(-1)
@@ -261,12 +263,7 @@ def main(argv: list[str]) -> None:
     import os
     import time
 
-    from motiondiff.eval import action_table
-    from motiondiff.eval.protocol import Evaluators
-    from motiondiff.model_files.loading import load_model as load_module
-    from motiondiff.model_files.resolve import find_model
-    from motiondiff.runtime.paths import REPO_DIR, work_dir
-    from motiondiff.studies.config import study_config
+    from motiondiff.eval.protocol import Evaluators  # lazy: torchmetrics (+2.6 s to import)
 
     cfg = study_config("behaviour", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))

@@ -32,9 +32,19 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motiondiff.data.representations.spec import bridge_from_spec
+from motiondiff.edit.api import edit_parts, inbetween
+from motiondiff.edit.inputs import dataset_motions
+from motiondiff.edit.masks import EditError
 from motiondiff.edit.measures import SPEED_FLOOR, boundary_jumps, edit_numbers
 from motiondiff.edit.smoothing import smoothness_of_joints
+from motiondiff.model_files.loading import load_model as load_module
+from motiondiff.model_files.resolve import find_model
 from motiondiff.runtime.atomic import finite_or_null, write_json
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.paths import REPO_DIR
+from motiondiff.runtime.scripting import quiet_tool_caches
+from motiondiff.studies.config import study_config
 
 MAX_RATIO = 3.0  # a boundary step at most 3x the generated middle's typical speed counts as seamless
 WRISTS_UP_SHARE = 0.25  # share of frames with both wrists above the head that counts as "hands raised"
@@ -91,7 +101,6 @@ def _raise_condition(module, text: str):
 
 def walking_clips(module, split: str, count: int, data_root=None) -> list:
     """``count`` clips whose label or a caption contains "walk": from ``split`` first, then the other splits."""
-    from motiondiff.edit.inputs import dataset_motions
 
     found = []
     for name in dict.fromkeys([split, "val", "train"]):
@@ -107,9 +116,6 @@ def evaluate_editing(module, *, split, num_edits, num_part_edits, modes, text, p
                      **sampling) -> dict:  # fmt: skip
     """The numbers of the module docstring, per mode (the settings of conf/study/editing.yaml). ``sampling``:
     sampler, steps, eta, guidance, resample, hold_from, reconstruction."""
-    from motiondiff.data.representations.spec import bridge_from_spec
-    from motiondiff.edit.api import edit_parts, inbetween
-    from motiondiff.edit.inputs import dataset_motions
 
     fps = float(module.hparams.fps)
     bridge = bridge_from_spec(module.hparams.get("representation"), module.hparams.feature_dim)
@@ -284,13 +290,6 @@ def format_report(report: dict, checkpoint: str = "") -> str:
 
 
 def main(argv: list[str]) -> Path:
-    from motiondiff.edit.masks import EditError
-    from motiondiff.model_files.loading import load_model as load_module
-    from motiondiff.model_files.resolve import find_model
-    from motiondiff.runtime.errors import UsageError
-    from motiondiff.runtime.paths import REPO_DIR
-    from motiondiff.runtime.scripting import quiet_tool_caches
-    from motiondiff.studies.config import study_config
 
     quiet_tool_caches()
     cfg = study_config("editing", argv)

@@ -27,10 +27,16 @@ import torch
 
 from motiondiff.bench.timing import median_seconds as timed_median
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
-from motiondiff.lit.conditions import text_encoder_kwargs
+from motiondiff.lit.conditions import condition_batch, text_encoder_kwargs
+from motiondiff.model_files.loading import load_latent_model
+from motiondiff.model_files.loading import load_model as load_module
+from motiondiff.model_files.resolve import find_model
+from motiondiff.models.graph import batch_graphs
 from motiondiff.runtime.atomic import finite_or_null, write_json
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.paths import REPO_DIR, shown
+from motiondiff.studies.config import study_config
+from motiondiff.text.encoders import build_text_encoder
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "comparison"
 # Tab. 4's rows: (level the hierarchy stops at and decodes, local-action energy guidance on)
@@ -47,8 +53,8 @@ MDM_ROW = "MDM (x0, DDIM-{steps})"
 def local_latents(latent, mdm, graphs, frames: int, generator: torch.Generator, steps: int = 50) -> torch.Tensor:
     """(B, A_max, Q_a, D') standardised action-level latents c^k: one MDM motion per local description of each
     caption graph (all descriptions in batched calls), zero rows past a caption's action count."""
-    from motiondiff.eval.protocol import generate
-    from motiondiff.guided.local_actions import encode_local_motions
+    from motiondiff.eval.protocol import generate  # lazy: torchmetrics (+2.6 s to import)
+    from motiondiff.guided.local_actions import encode_local_motions  # lazy: spacy (+0.7 s to import)
 
     texts = [g.action_texts() for g in graphs]
     flat = [t for ts in texts for t in ts]
@@ -65,8 +71,7 @@ def local_latents(latent, mdm, graphs, frames: int, generator: torch.Generator, 
 
 def guided_features(latent, table, captions, lengths, steps, final_level, refs, generator, batch_size=64):
     """De-normalised GuidedMotion features, one per caption, at its length (``refs``: local latents or None)."""
-    from motiondiff.models.graph import batch_graphs
-    from motiondiff.text.parse import ROLES
+    from motiondiff.text.parse import ROLES  # lazy: spacy (+0.7 s to import)
 
     out = []
     for s in range(0, len(captions), batch_size):
@@ -81,7 +86,7 @@ def guided_features(latent, table, captions, lengths, steps, final_level, refs, 
 
 
 def replication(latent, mdm, local_mdm, evaluators, clips, table, r: int, args: dict) -> dict[str, dict]:
-    from motiondiff.eval.protocol import generate, replication_metrics
+    from motiondiff.eval.protocol import generate, replication_metrics  # lazy: torchmetrics (+2.6 s to import)
 
     seed = int(args["seed"]) * 1000 + r
     captions = clips.pick_captions(np.random.default_rng(seed))
@@ -110,9 +115,7 @@ def median_seconds(fn, repeats: int) -> float:
 
 def sampling_times(latent, mdm, local_mdm, table, caption: str, frames: int, args: dict) -> dict[str, float]:
     """Median seconds for one motion of ``frames`` frames from ``caption``, guidance on, in this process."""
-    from motiondiff.lit.conditions import condition_batch
-    from motiondiff.models.graph import batch_graphs
-    from motiondiff.text.parse import ROLES
+    from motiondiff.text.parse import ROLES  # lazy: spacy (+0.7 s to import)
 
     graph, feats = table[caption]
     graphs = batch_graphs([graph], [feats], ROLES)
@@ -204,15 +207,10 @@ def write(out: Path, rows: dict, times: dict, meta: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from motiondiff.data.datamodules import PreparedDataModule
-    from motiondiff.eval.protocol import EvalClips, Evaluators
-    from motiondiff.guided.local_actions import check_same_features
-    from motiondiff.model_files.loading import load_latent_model
-    from motiondiff.model_files.loading import load_model as load_module
-    from motiondiff.model_files.resolve import find_model
-    from motiondiff.studies.config import study_config
-    from motiondiff.text.encoders import build_text_encoder
-    from motiondiff.text.graph_features import graph_table
+    from motiondiff.data.datamodules import PreparedDataModule  # lazy: lightning (+4.4 s to import)
+    from motiondiff.eval.protocol import EvalClips, Evaluators  # lazy: torchmetrics (+2.6 s to import)
+    from motiondiff.guided.local_actions import check_same_features  # lazy: spacy (+0.7 s to import)
+    from motiondiff.text.graph_features import graph_table  # lazy: spacy (+0.7 s to import)
 
     argv = list(sys.argv[1:] if argv is None else argv)
     cfg = study_config("guided_compare", argv)

@@ -18,8 +18,16 @@ from pathlib import Path
 
 import numpy as np
 
+from motiondiff.data.formats.prepared import load_split
+from motiondiff.data.mirror import swap_left_right
+from motiondiff.lit.conditions import text_encoder_kwargs
+from motiondiff.model_files.loading import load_model
+from motiondiff.model_files.resolve import find_model
 from motiondiff.runtime.atomic import write_json
-from motiondiff.runtime.paths import REPO_DIR, shown
+from motiondiff.runtime.paths import REPO_DIR, shown, work_dir
+from motiondiff.studies.config import study_config
+from motiondiff.text.coverage import build_coverage, choose_threshold, coverage_path
+from motiondiff.text.encoders import build_text_encoder
 
 OUT_OF_DOMAIN = REPO_DIR / "data" / "coverage" / "out_of_domain.json"
 HELD_OUT = {"bandai_human": REPO_DIR / "data" / "paraphrases" / "bandai_human.json",
@@ -29,8 +37,6 @@ EXAMPLES = ["a person walks forward", "a person jumps forward", "a person runs",
 
 def split_captions(data_root: Path, split: str, mirror: bool) -> dict[str, list[str]]:
     """Captions of a prepared split by action name (with their mirror images' when `mirror`)."""
-    from motiondiff.data.formats.prepared import load_split
-    from motiondiff.data.mirror import swap_left_right
 
     data = load_split(data_root, split)
     names = list(data.meta["labels"]["content"])
@@ -49,14 +55,6 @@ def main(argv: list[str]) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from motiondiff.lit.conditions import text_encoder_kwargs
-    from motiondiff.model_files.loading import load_model
-    from motiondiff.model_files.resolve import find_model
-    from motiondiff.runtime.paths import work_dir
-    from motiondiff.studies.config import study_config
-    from motiondiff.text.coverage import build_coverage, choose_threshold, coverage_path
-    from motiondiff.text.encoders import build_text_encoder
 
     cfg = study_config("prompt_coverage", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", work_dir() / "outputs"))

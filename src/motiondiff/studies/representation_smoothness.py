@@ -20,6 +20,7 @@ import numpy as np
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
 from motiondiff.eval.report import write_markdown
 from motiondiff.metrics import smoothness
+from motiondiff.studies.config import study_config
 
 ORDER = ("jp", "rp6jr", "rpqjr", "rpajr", "rpejr", "rpmjr", "hml263")  # vvMDM Fig. 2's six, then HumanML3D's
 OUT = Path(__file__).resolve().parents[3] / "docs" / "results" / "representation_smoothness"
@@ -68,7 +69,6 @@ def plot(results: dict[str, dict], path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    from motiondiff.studies.config import study_config
 
     cfg = study_config("representation_smoothness", sys.argv[1:] if argv is None else argv)
     root = Path(cfg.root or embedded_data_root())

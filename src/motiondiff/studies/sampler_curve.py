@@ -22,6 +22,7 @@ from pathlib import Path
 from motiondiff.runtime.atomic import finite_or_null, write_json
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.paths import REPO_DIR
+from motiondiff.studies.config import study_config
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "sampler_curve"
 METRICS = ("fid", "r_precision_top3", "mm_dist", "diversity")
@@ -104,7 +105,6 @@ def write(out: Path, rows: list[dict], chosen: dict, tolerance: float, times: di
 
 
 def main(argv: list[str] | None = None) -> int:
-    from motiondiff.studies.config import study_config
 
     cfg = study_config("sampler_curve", argv if argv is not None else sys.argv[1:])
     rows = sorted((load_run(Path(p)) for p in cfg.runs), key=lambda r: (r["sampler"], r["steps"]))

@@ -29,6 +29,8 @@ from motiondiff.models.vae import LEVEL_TOKENS
 from motiondiff.runtime.checked_loading import torch_load
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.paths import REPO_DIR, shown
+from motiondiff.runtime.scripting import quiet_tool_caches, register_resolvers
+from motiondiff.studies.config import study_config
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "vae_levels"
 # column key, header (metric keys come from lit.vae.mpjpe and protocol.replication_metrics)
@@ -65,8 +67,6 @@ def datamodule(module: MotionVAEModule, data_root: str | None):
     """The checkpoint's dataset as train_vae.py builds it (its conf/dataset entry), in its representation."""
     from hydra import compose, initialize_config_dir
     from hydra.utils import instantiate
-
-    from motiondiff.runtime.scripting import register_resolvers
 
     register_resolvers()
     hp = module.hparams
@@ -198,8 +198,6 @@ def format_table(rows: dict, infos: dict, pairs: list[dict], notes: list[str]) -
 
 
 def main(argv: list[str]) -> Path:
-    from motiondiff.runtime.scripting import quiet_tool_caches
-    from motiondiff.studies.config import study_config
 
     quiet_tool_caches()
     cfg = study_config("vae_levels", argv)

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from motiondiff.runtime.atomic import atomic_write
+
 COVERAGE_SUFFIX = ".coverage.safetensors"
 
 
@@ -82,8 +84,6 @@ class PromptCoverage:
 
     def save(self, path: str | Path) -> Path:
         from safetensors.numpy import save_file
-
-        from motiondiff.runtime.atomic import atomic_write
 
         meta = {"action_names": json.dumps(self.action_names), "threshold": repr(float(self.threshold)),
                 "encoder": self.encoder}  # fmt: skip

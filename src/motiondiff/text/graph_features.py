@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import torch
 
-from motiondiff.text.parse import CaptionGraph
+from motiondiff.text.parse import CaptionGraph, parse_captions
 
 
 def _tokenizer(encoder):
@@ -66,7 +66,6 @@ def node_features(graphs: Sequence[CaptionGraph], encoder) -> list[torch.Tensor]
 
 def graph_table(texts: Sequence[str], encoder, batch_size: int = 64) -> dict[str, tuple[CaptionGraph, torch.Tensor]]:
     """caption -> (semantic graph, node features) for every distinct caption (parsed and encoded in batches)."""
-    from motiondiff.text.parse import parse_captions
 
     unique = sorted(set(texts))
     table = {}

@@ -34,6 +34,7 @@ from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import PrepareError, check_output
 from motiondiff.data.representations.hml_features import canonicalize_joints, mean_std
 from motiondiff.runtime.atomic import atomic_write
+from motiondiff.runtime.paths import REPO_DIR as repo
 
 COMPLEX_MIN_ACTIONS = 3  # GuidedMotion's complex-motion subset: >= 3 local actions ...
 COMPLEX_MIN_FRAMES = 150  # ... and >= 150 frames
@@ -310,7 +311,6 @@ def main(argv: list[str] | None = None) -> int:
         )
         return 2
     counts = {"train": int(args.get("train", 64)), "val": int(args.get("val", 16)), "test": int(args.get("test", 64))}
-    from motiondiff.runtime.paths import REPO_DIR as repo
 
     try:
         report = build(args.get("src", repo / "data" / "bandai_mini"), args["out"], counts, int(args.get("seed", 0)),

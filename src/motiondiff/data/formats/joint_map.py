@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from motiondiff.data.formats.joint_infer import guess_units, infer_smpl22
 from motiondiff.geometry.skeleton import get_skeleton
 
 
@@ -54,7 +55,6 @@ class JointMap:
         conventions read and the unit guess). `offsets` (J, 3) rest offsets are needed to guess the units when
         `units_to_metres` is not given; they also let joints that sit on their parent (zero offset, as CMU's
         LowerBack or Neck) be skipped. Raises one ValueError naming every SMPL joint that cannot be matched."""
-        from motiondiff.data.formats.joint_infer import guess_units, infer_smpl22
 
         joints = infer_smpl22(list(source_names), [int(p) for p in parents], offsets)
         if units_to_metres is None:

@@ -41,6 +41,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from motiondiff.geometry.kinematics import forward_kinematics
+from motiondiff.geometry.skeleton import SMPL22
+
 if TYPE_CHECKING:
     from motiondiff.data.formats.bvh import BVHMotion
     from motiondiff.data.formats.joint_map import JointMap
@@ -234,8 +237,6 @@ def bvh_up_axis(
     """`detect_up_axis` on a BVH's SMPL-22 joints (through `joint_map`): head = SMPL's head, feet = ankles and toes;
     the rest pose is the hierarchy with every rotation zero (OFFSETs only). `rest_pose=False`: the rest pose is no
     evidence (SMPL parameter files stand in SMPL's Y-up template whatever their data's up axis)."""
-    from motiondiff.geometry.kinematics import forward_kinematics
-    from motiondiff.geometry.skeleton import SMPL22
 
     if parse_up_axis(up_axis) is not None:
         return detect_up_axis(np.zeros((1, 1, 3)), 0, [0], up_axis=up_axis)

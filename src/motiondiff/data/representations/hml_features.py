@@ -16,7 +16,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from motiondiff.geometry.rotations import matrix_to_6d, qbetween, qinv, qmul, qnormalize, qrot, quat_to_matrix
-from motiondiff.geometry.skeleton import KIT21, SMPL22, Skeleton
+from motiondiff.geometry.skeleton import KIT21, SMPL22, SMPL22_BONE_LENGTHS, Skeleton
 
 UP = np.array([0.0, 1.0, 0.0])
 FORWARD = np.array([0.0, 0.0, 1.0])
@@ -155,7 +155,6 @@ def ground_and_face(positions: np.ndarray, skeleton: Skeleton) -> tuple[np.ndarr
 
 
 def _default_lengths(skeleton: Skeleton) -> np.ndarray | None:
-    from motiondiff.geometry.skeleton import SMPL22_BONE_LENGTHS
 
     return SMPL22_BONE_LENGTHS if skeleton.name == "smpl22" else None
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.representations import Representation, get_representation
-from motiondiff.data.representations.hml_features import canonicalize_joints, features_from_canonical
+from motiondiff.data.representations.hml_features import canonicalize_joints, features_from_canonical, skeleton_for_dim
 from motiondiff.geometry.skeleton import SKELETONS, Skeleton, get_skeleton
 
 
@@ -46,8 +46,6 @@ def rig_from_spec(rig: dict) -> Skeleton:
 def representation_from_spec(spec: dict | None, feature_dim: int | None = None) -> Representation:
     """Rebuild the representation of a checkpoint; old checkpoints (no spec) used HumanML3D features."""
     if spec is None:
-        from motiondiff.data.representations.hml_features import skeleton_for_dim
-
         skel = skeleton_for_dim(int(feature_dim))
         return get_representation("hml263" if skel.num_joints == 22 else "kit251", skel)
     feature_skeleton = get_skeleton(spec["feature_skeleton"])
