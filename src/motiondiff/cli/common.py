@@ -13,6 +13,7 @@ from motiondiff.model_files.resolve import find_model  # noqa: F401  (the comman
 from motiondiff.runtime.errors import UsageError  # noqa: F401  (re-exported: the CLI's error type)
 from motiondiff.runtime.paths import REPO_DIR
 from motiondiff.runtime.scripting import (  # noqa: F401
+    USER_ERRORS,
     key_value_args,
     quiet_tool_caches,
     register_resolvers,
@@ -40,8 +41,6 @@ def trainer_parts(cfg: DictConfig) -> tuple[list, list]:
 def _instantiate(cfg):
     from hydra.errors import InstantiationException
     from hydra.utils import instantiate
-
-    from motiondiff.runtime.scripting import USER_ERRORS
 
     try:
         return instantiate(cfg)

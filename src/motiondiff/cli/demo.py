@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from motiondiff.demo import DemoModels, build_demo
 from motiondiff.runtime.scripting import quiet_tool_caches, user_errors
 
 
@@ -50,7 +51,6 @@ def _yes(value: str) -> bool:
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     quiet_tool_caches()
-    from motiondiff.demo import DemoModels, build_demo
 
     models = DemoModels(guided=args.guided, local_model=args.local_model)
     demo = build_demo(models, args.model, seconds=args.seconds, steps=args.steps, output_dir=args.output_dir)

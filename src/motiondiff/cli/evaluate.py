@@ -35,6 +35,8 @@ from motiondiff.eval.protocol import (
     replication_metrics,
 )
 from motiondiff.lit.generation import feed_forward_shape
+from motiondiff.model_files.loading import load_model as load_module
+from motiondiff.pipelines.coverage import load_prompt_mapping
 from motiondiff.runtime.hardware import inference_precision, resolve_device
 
 log = logging.getLogger(__name__)
@@ -223,8 +225,6 @@ def _log_wandb(out: Path, cfg: DictConfig, rows: dict, extra: dict) -> None:
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_EVALUATE)  # types and ranges before any work
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
-    from motiondiff.model_files.loading import load_model as load_module
-    from motiondiff.pipelines.coverage import load_prompt_mapping
 
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_model(cfg.checkpoint, cfg.paths.output_dir)

@@ -13,10 +13,18 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, find_model
+from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma
+from motiondiff.cli.validate import RULES_SAMPLE, check
+from motiondiff.export.outputs import check_formats_for
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
+from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
 from motiondiff.lit.latent import HierarchicalLatentModule
+from motiondiff.model_files.loading import load_latent_model, load_model
 from motiondiff.models.hierarchical import LEVELS
+from motiondiff.pipelines import GuidedMotionPipeline
+from motiondiff.pipelines.guided import level_steps_of
 from motiondiff.runtime.hardware import resolve_device
+from motiondiff.runtime.prompt_text import check_text
 
 
 def _list(value) -> list | None:
@@ -33,7 +41,6 @@ def _choice(value) -> int | list[int]:
 def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, int]:
     """Steps per level: level_steps=[m, a, s] (e.g. the paper's [15, 15, 20]), else steps= for each, else the
     model's defaults (checked by the pipeline's ``level_steps_of``)."""
-    from motiondiff.pipelines.guided import level_steps_of
 
     given = _list(cfg.get("level_steps"))
     if given is None and cfg.steps is not None:
@@ -42,13 +49,6 @@ def level_steps(cfg: DictConfig, module: HierarchicalLatentModule) -> dict[str, 
 
 
 def run(cfg: DictConfig) -> Path:
-    from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma
-    from motiondiff.cli.validate import RULES_SAMPLE, check
-    from motiondiff.export.outputs import check_formats_for
-    from motiondiff.lit.generation import SAMPLE_BATCH, check_num_samples
-    from motiondiff.model_files.loading import load_latent_model, load_model
-    from motiondiff.pipelines import GuidedMotionPipeline
-    from motiondiff.runtime.prompt_text import check_text
 
     check(cfg, RULES_SAMPLE)  # types, ranges and finite numbers before any work
     out = Path(HydraConfig.get().runtime.output_dir)

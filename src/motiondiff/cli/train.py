@@ -11,20 +11,23 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict, trainer_parts
+from motiondiff.cli.common import REPO_DIR, UsageError, text_encoder_kwargs, to_dict, trainer_parts
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
 from motiondiff.lit.diffusion import MotionDiffusionModule
+from motiondiff.lit.resume import KEY
+from motiondiff.model_files.release_checks import release_paths
+from motiondiff.runtime.checked_loading import CKPT_FIX, check_finite_state, check_same_shapes, reading, torch_load
 from motiondiff.runtime.provenance import provenance, update_run_json
+from motiondiff.text.cache import TextEmbeddingCache
+from motiondiff.text.encoders import build_text_encoder
 
 log = logging.getLogger(__name__)
 
 
 def build_text_table(cfg: DictConfig, dm: MotionDataModule):
     """Features of every caption of the train and val splits, encoded once and cached on disk."""
-    from motiondiff.text.cache import TextEmbeddingCache
-    from motiondiff.text.encoders import build_text_encoder
 
     encoder = build_text_encoder(**text_encoder_kwargs(cfg.text_encoder))
     cache = TextEmbeddingCache(encoder, Path(cfg.paths.cache_dir) / "text")
@@ -72,9 +75,6 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
     The architecture must match, except for parameters this run adds (``NEW_IN_FINE_TUNE``)."""
     from safetensors.torch import load_file
 
-    from motiondiff.model_files.release_checks import release_paths
-    from motiondiff.runtime.checked_loading import check_finite_state, reading, torch_load
-
     path = Path(source)
     if path.suffix in (".safetensors", ".json"):
         path = release_paths(path)[0]
@@ -104,7 +104,6 @@ LIGHTNING_KEYS = ("pytorch-lightning_version", "epoch", "global_step", "optimize
 
 
 def _state_dict(checkpoint: dict, path: Path) -> dict:
-    from motiondiff.runtime.checked_loading import CKPT_FIX
 
     state = checkpoint.get("state_dict")
     if not isinstance(state, dict):
@@ -115,8 +114,6 @@ def _state_dict(checkpoint: dict, path: Path) -> dict:
 def check_resume(ckpt: str, module: MotionDiffusionModule, batch_size: int) -> None:
     """A checkpoint to resume must be readable, finite, of this run's batch size and this architecture: one line
     before training starts, not a traceback from inside Lightning's restore."""
-    from motiondiff.lit.resume import KEY
-    from motiondiff.runtime.checked_loading import check_finite_state, check_same_shapes, torch_load
 
     path = Path(ckpt)
     checkpoint = torch_load(path, f"ckpt_path={ckpt}: the checkpoint")
@@ -139,7 +136,7 @@ def evaluation_callbacks(callbacks: list) -> list:
     best-FID checkpoint when the evaluation is switched off (``callbacks.evaluation=null``): nothing logs val/fid."""
     from lightning.pytorch.callbacks import ModelCheckpoint
 
-    from motiondiff.eval.callbacks import GenerationEvaluation
+    from motiondiff.eval.callbacks import GenerationEvaluation  # lazy: torchmetrics (+2.6 s to import)
 
     evaluations = [c for c in callbacks if isinstance(c, GenerationEvaluation)]
     missing = [c for c in evaluations if not c.available]
@@ -161,7 +158,7 @@ def evaluation_callbacks(callbacks: list) -> list:
 def check_sample_videos(callbacks: list, module: MotionDiffusionModule) -> None:
     """The evaluation's sample videos (``callbacks.evaluation.videos``) ask for prompts or action names this model
     has: a wrong one fails now, before anything is written, not at the first evaluation."""
-    from motiondiff.eval.callbacks import GenerationEvaluation
+    from motiondiff.eval.callbacks import GenerationEvaluation  # lazy: torchmetrics (+2.6 s to import)
 
     for callback in callbacks:
         if isinstance(callback, GenerationEvaluation) and callback.videos is not None:
@@ -220,8 +217,7 @@ def run(cfg: DictConfig) -> Path:
 def final_evaluation(cfg: DictConfig, module: MotionDiffusionModule, dm: MotionDataModule, out: Path, steps: int):
     """evaluate.py's protocol on the trained weights (the EMA ones when ema=true), written into the run folder:
     what a multirun's summary table reads (`motiondiff.eval.ablation`)."""
-    from motiondiff.cli.common import REPO_DIR
-    from motiondiff.cli.evaluate import report_evaluation
+    from motiondiff.cli.evaluate import report_evaluation  # lazy: torchmetrics (+2.6 s to import)
 
     base = OmegaConf.load(REPO_DIR / "conf" / "evaluate.yaml")
     for key in ("defaults", "hydra", "checkpoint"):

@@ -21,6 +21,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from motiondiff import metrics as M
 from motiondiff.cli.common import REPO_DIR, UsageError
+from motiondiff.cli.validate import check_finite
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.eval.protocol import TEXT_MOTION, EvalClips, Evaluators, time_reversed
 from motiondiff.lit.evaluator import ActionClassifierModule, MovementAutoencoderModule, TextMotionEvaluatorModule
@@ -131,7 +132,6 @@ def _overrides(cfg: DictConfig) -> list[str]:
 
 
 def run(cfg: DictConfig) -> Path:
-    from motiondiff.cli.validate import check_finite
 
     check_finite(cfg)  # a NaN or infinite setting fails before any work
     L.seed_everything(cfg.seed, workers=True)

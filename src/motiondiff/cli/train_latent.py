@@ -22,6 +22,8 @@ from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.hierarchical import LEVELS
 from motiondiff.runtime.checked_loading import reading
 from motiondiff.runtime.provenance import provenance, update_run_json
+from motiondiff.text.encoders import build_text_encoder
+from motiondiff.text.graph_features import graph_table
 
 log = logging.getLogger(__name__)
 
@@ -55,8 +57,6 @@ def check_vaes(vaes: dict[str, MotionVAEModule], dm: MotionDataModule, name: str
 
 
 def build_graph_table(cfg: DictConfig, dm: MotionDataModule) -> dict:
-    from motiondiff.text.encoders import build_text_encoder
-    from motiondiff.text.graph_features import graph_table
 
     texts = [t for split in ("train", "val") for rec in dm.dataset(split).records for t in rec.texts]
     if not texts:

@@ -15,6 +15,7 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from motiondiff.data.representations.spec import bridge_from_spec
+from motiondiff.lit.diffusion import MotionDiffusionModule  # lazy: lightning (+4.4 s to import)
 from motiondiff.lit.motion_diffusion import MotionDiffusion
 from motiondiff.model_files.release_checks import (
     FORMAT,
@@ -130,7 +131,6 @@ def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple
     """Release a training checkpoint (a motion model, with its EMA weights when it trained with EMA, or a
     GuidedMotion latent model with its VAEs) with the training step, the run's
     command line and `provenance` (data, training time, machine, metrics) in the JSON."""
-    from motiondiff.lit.diffusion import MotionDiffusionModule  # lazy: lightning (+4.4 s to import)
     from motiondiff.lit.latent import HierarchicalLatentModule  # lazy: lightning, spacy (+5.1 s to import)
 
     state = torch_load(ckpt)

@@ -15,6 +15,7 @@ import re
 from pathlib import Path
 
 from motiondiff.lit.motion_diffusion import MotionDiffusion
+from motiondiff.lit.vae import MotionVAEModule  # lazy: lightning (+4.4 s to import)
 from motiondiff.model_files.resolve import RELEASE_SUFFIXES
 from motiondiff.models.hierarchical import LEVELS
 from motiondiff.runtime.checked_loading import reading
@@ -198,7 +199,6 @@ def _check_keys(h: dict, cls, where: str, prefix: str = "hparams") -> None:
 def _check_latent_hparams(h: dict, where: str) -> None:
     """A GuidedMotion latent release: its own keys, a VAE per level with finite normalisation, a named encoder."""
     from motiondiff.lit.latent import HierarchicalLatentModule  # lazy: lightning, spacy (+5.1 s to import)
-    from motiondiff.lit.vae import MotionVAEModule  # lazy: lightning (+4.4 s to import)
 
     _check_keys(h, HierarchicalLatentModule, where)
 

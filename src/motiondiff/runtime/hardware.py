@@ -9,6 +9,8 @@ import platform
 
 import torch
 
+from motiondiff.runtime.errors import UsageError
+
 
 @functools.cache
 def cpu_has_fast_bf16() -> bool:
@@ -58,7 +60,6 @@ def inference_precision(name: str, device: str = "cpu", shape: tuple[int, int, i
     """``precision=`` for sampling: "auto" is bf16 autocast where the device runs it natively and, on a CPU, where
     a matmul of the model's feed-forward `shape` (rows, d_model, ff_size) measured faster in bf16
     (`bf16_matmul_is_faster`); full precision elsewhere. "bf16"/"32" force one."""
-    from motiondiff.runtime.errors import UsageError
 
     key = str(name).strip().lower()
     if key == "auto":
@@ -102,8 +103,6 @@ def resolve_device(name: str) -> str:
     """The torch device of ``device=``: ``auto`` is CUDA where a GPU is visible, else the CPU; an explicit device
     that this machine lacks is one clear error instead of torch's traceback deep inside loading."""
     import torch
-
-    from motiondiff.runtime.errors import UsageError
 
     name = str(name).strip().lower()
     if name == "auto":

@@ -13,7 +13,10 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from motiondiff.runtime.boundary import USER_ERRORS, guarded, refuse_if_in_use, run_folder  # noqa: F401  (USER_ERRORS re-exported)
 from motiondiff.runtime.errors import UsageError
-from motiondiff.runtime.paths import REPO_DIR, work_dir
+from motiondiff.runtime.hardware import (
+    fast_cpu_precision,  # torch: imported when a config asks, not to start a command
+)
+from motiondiff.runtime.paths import CONF_DIR, REPO_DIR, work_dir
 
 # This process's part of its run folder's name (pid and a random token, fixed for the process): two runs started in
 # the same second never share a folder.
@@ -33,9 +36,6 @@ def register_resolvers() -> None:
 
 
 def _fast_cpu_precision() -> str:
-    from motiondiff.runtime.hardware import (
-        fast_cpu_precision,  # torch: imported when a config asks, not to start a command
-    )
 
     return fast_cpu_precision()
 
@@ -105,8 +105,6 @@ def run_hydra(config_name: str, run) -> None:
     sys.argv), after the resolvers and tool caches are set; user errors become one line and exit code 2."""
     import hydra
 
-    from motiondiff.runtime.paths import CONF_DIR
-
     register_resolvers()
     quiet_tool_caches()
     if not any(a.startswith("hydra.job.name=") for a in sys.argv[1:]):  # log files named after the command
@@ -134,8 +132,6 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
     from hydra.core.global_hydra import GlobalHydra
     from hydra.errors import HydraException
     from omegaconf.errors import OmegaConfBaseException
-
-    from motiondiff.runtime.paths import CONF_DIR
 
     try:
         with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
