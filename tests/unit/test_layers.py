@@ -203,6 +203,16 @@ def test_the_generation_commands_import_no_other_command_and_no_study():
     assert not bad, "commands that borrow from another command or a study:\n" + "\n".join(bad)
 
 
+SHELL_LINES = 150  # a command that needs more is doing a pipeline's work
+
+
+def test_the_generation_commands_are_short():
+    long = {
+        m: n for m in SHELLS if (n := len((SRC / (m.replace(".", "/") + ".py")).read_text().splitlines())) > SHELL_LINES
+    }
+    assert not long, f"commands over {SHELL_LINES} lines (move the work into the pipelines): {long}"
+
+
 @pytest.mark.parametrize("extra", [{"motiondiff.cli.edit": {"motiondiff.cli.sample"}},
                                    {"motiondiff.cli.sample": {"motiondiff.studies.behaviour"}}])  # fmt: skip
 def test_the_shell_check_fails_on_a_planted_borrowing(extra):
