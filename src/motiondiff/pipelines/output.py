@@ -88,41 +88,47 @@ class MotionOutput:
         long = self.info.get("long_motion")  # one motion through several prompts: long_<prompts joined by "then">_<k>
         names = [" then ".join(str(s["label"]) for s in long["segments"])] * len(self) if long else self.prompts
         stems = motion_stems(names, "long_" if long else "")  # <prompt>_<k>, as the commands
+        title = [(s["start"], str(s["label"])) for s in long["segments"]] if long else None
         if self.edit is not None:
             rows = save_edits(folder, self, formats, rig_names)
         else:
-            rows = [self._save_one(folder / stem, i, formats, rig_names, body) for i, stem in enumerate(stems)]
+            rows = [self._save_one(folder / stem, i, names[:i].count(names[i]), title, formats, rig_names, body)
+                    for i, stem in enumerate(stems)]  # fmt: skip
         doc = {**(summary or {}), "info": self.info, "samples": rows}
         write_json(folder / "results.json", finite_or_null(doc), default=str)
         return rows
 
-    def _save_one(self, stem: Path, i: int, formats, rig_names, body) -> dict:
+    def _save_one(self, stem: Path, i: int, index: int, title, formats, rig_names, body) -> dict:
+        """Motion ``i``'s files and results row; ``index``: its number among its prompt's motions (the stem's _k)."""
         joints, feats, prompt = self.joints[i], self.features[i], self.prompts[i]
         changed = self._changed(i)
-        if changed is not None:
-            save_npy(f"{stem}_joints_raw.npy", self.representation.decode_numpy(feats).astype(np.float32))
+        raw = self.representation.decode_numpy(feats).astype(np.float32) if changed is not None else None
+        if raw is not None:
+            save_npy(f"{stem}_joints_raw.npy", raw)
         save_npy(f"{stem}_joints.npy", joints.astype(np.float32))
         save_npy(f"{stem}_features.npy", np.asarray(feats, dtype=np.float32))
-        long = self.info.get("long_motion")
-        title = [(s["start"], str(s["label"])) for s in long["segments"]] if long else prompt or "unconditioned"
-        exports = export_features(stem, self.representation, feats, self.fps, formats, title=title, joints=changed,
-                                  rig_names=rig_names, body=body)  # fmt: skip
-        measured, smoothing = self._measured(i)
+        exports = export_features(stem, self.representation, feats, self.fps, formats, title=title or prompt or
+                                  "unconditioned", joints=changed, rig_names=rig_names, body=body)  # fmt: skip
+        measured, smoothing = self._measured(i, raw)
         per_motion = self.info.get("per_motion") or [{}] * len(self)
-        return {"prompt": prompt, "index": int(stem.name.rsplit("_", 1)[1]), "frames": len(joints), "joints": f"{stem}_joints.npy",
+        return {"prompt": prompt, "index": index, "frames": len(joints), "joints": f"{stem}_joints.npy",
                 "features": f"{stem}_features.npy", "video": exports.get("mp4", exports.get("gif")),
                 "exports": exports, "mean_joint_speed": mean_joint_speed(measured, self.fps),
                 **asdict(measure(measured, self.fps)), **({"smoothing": smoothing} if smoothing else {}),
                 **(self.info["cleanup"][i] if "cleanup" in self.info else {}), **per_motion[i]}  # fmt: skip
 
-    def _measured(self, i: int) -> tuple[np.ndarray, dict | None]:
+    def _measured(self, i: int, raw: np.ndarray | None = None) -> tuple[np.ndarray, dict | None]:
         """Motion ``i`` as its measures read it (on the features' skeleton, smoothed and cleaned as the saved
-        joints were) and the smoothing report: vvMDM's smoothness before and after the filter."""
+        joints were) and the smoothing report: vvMDM's smoothness before and after the filter. ``raw``: its
+        features decoded, where the caller has them already."""
         bridge = self.bridge or HMLBridge(self.representation, self.representation.skeleton)
         measured = self.joints[i] if bridge.identity else bridge.joints(self.features[i])
         sigma, smoothing = self.info.get("smooth_sigma"), None
         if sigma:
-            raw = self.representation.decode_numpy(self.features[i]).astype(np.float32) if bridge.identity else measured
+            if not bridge.identity:
+                raw = measured
+            elif raw is None:
+                raw = self.representation.decode_numpy(self.features[i]).astype(np.float32)
             smoothed = smooth_joints(raw, float(sigma))
             smoothing = {"sigma_frames": float(sigma), "measured_on": "HumanML3D features of the joints, as evaluate.py",
                          "smoothness_before": smoothness_of_joints(raw, bridge.feature_skeleton),
