@@ -28,14 +28,26 @@ def _before_model(cfg, condition: str = "text") -> None:
     check_model_file(find_model(cfg.checkpoint, cfg.paths.output_dir, condition))
 
 
-def train() -> None:
+def _checked(name: str, rules, command, model: bool = True) -> None:
+    """Hydra command `name`: its config passes `rules` (and, with `model`, `_before_model`) before `command()` gives
+    the run function, so a refused config never pays for the command's imports."""
+
     def run(cfg):
-        validate.check(cfg, validate.RULES_TRAIN)
-        from motiondiff.cli.train import run as train_run  # lazy: lightning (+4.4 s to import)
+        validate.check(cfg, rules)
+        if model:
+            _before_model(cfg)
+        return command()(cfg)
 
-        return train_run(cfg)
+    _run(name, run)
 
-    _run("train", run)
+
+def train() -> None:
+    def command():
+        from motiondiff.cli.train import run  # lazy: lightning (+4.4 s to import)
+
+        return run
+
+    _checked("train", validate.RULES_TRAIN, command, model=False)
 
 
 def sample() -> None:
@@ -55,24 +67,16 @@ def sample() -> None:
 
 
 def edit() -> None:
-    def run(cfg):
-        validate.check(cfg, validate.RULES_EDIT)
-        _before_model(cfg)
-
-        return edit_run(cfg)
-
-    _run("edit", run)
+    _checked("edit", validate.RULES_EDIT, lambda: edit_run)
 
 
 def evaluate() -> None:
-    def run(cfg):
-        validate.check(cfg, validate.RULES_EVALUATE)
-        _before_model(cfg)
-        from motiondiff.cli.evaluate import run as evaluate_run  # lazy: torchmetrics (+2.6 s to import)
+    def command():
+        from motiondiff.cli.evaluate import run  # lazy: torchmetrics (+2.6 s to import)
 
-        return evaluate_run(cfg)
+        return run
 
-    _run("evaluate", run)
+    _checked("evaluate", validate.RULES_EVALUATE, command)
 
 
 def train_vae() -> None:

@@ -13,12 +13,9 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any
-
-from hydra.experimental.callback import Callback
-from omegaconf import DictConfig
 
 from motiondiff.eval import report
+from motiondiff.eval.sweep import MultirunEnd
 from motiondiff.runtime.atomic import atomic_write
 
 TITLES = {
@@ -113,12 +110,9 @@ def write_table(sweep_dir: str | Path, notes: list[str] | None = None) -> Path:
     return path
 
 
-class AblationTable(Callback):
-    def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
-        try:
-            write_table(config.hydra.sweep.dir)
-        except FileNotFoundError as err:  # every job failed: their own errors were already reported
-            print(f"no ablation table: {err}")
+class AblationTable(MultirunEnd):
+    what = "ablation table"
+    write = staticmethod(write_table)
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
 A Hydra callback: when the multirun ends it reads each job's metrics.json and draws FID and R-precision against
 the guidance scale (MDM Fig. 4b) into `<sweep dir>/guidance_sweep.png`, with the values in guidance_sweep.md.
+`MultirunEnd` is that callback's frame, which the ablation table (`eval.ablation`) shares.
 """
 
 from __future__ import annotations
@@ -38,9 +39,23 @@ def plot_sweep(sweep_dir: str | Path) -> Path:
     return png
 
 
-class GuidanceSweepPlot(Callback):
+class MultirunEnd(Callback):
+    """A Hydra callback that runs ``write(sweep dir)`` when the multirun ends (the sweep's table or plot); a sweep
+    with no job's files says so in one line instead."""
+
+    what = ""  # what write makes, for that line
+
+    @staticmethod
+    def write(sweep_dir: str | Path) -> Path:
+        raise NotImplementedError
+
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
         try:
-            plot_sweep(config.hydra.sweep.dir)
+            self.write(config.hydra.sweep.dir)
         except FileNotFoundError as err:  # every job failed: their own errors were already reported
-            print(f"no guidance sweep plot: {err}")
+            print(f"no {self.what}: {err}")
+
+
+class GuidanceSweepPlot(MultirunEnd):
+    what = "guidance sweep plot"
+    write = staticmethod(plot_sweep)

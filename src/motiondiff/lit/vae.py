@@ -8,14 +8,17 @@ from the posterior mean (the quantity the best checkpoint is chosen by).
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 import lightning as L
 import torch
 
 from motiondiff.data.representations.spec import representation_from_spec
 from motiondiff.lit.diffusion import MotionDiffusionModule
+from motiondiff.models.backbones.encoder_layer import TransformerSize
 from motiondiff.models.vae import MotionVAE, vae_loss
 
-VAE_SIZE_KEYS = ("latent_dim", "d_model", "num_layers", "num_heads", "ff_size", "dropout")
+VAE_SIZE_KEYS = ("latent_dim", *(f.name for f in fields(TransformerSize)))  # what MotionVAE reads of `vae`
 
 
 def mpjpe(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor, root_aligned: bool = False) -> torch.Tensor:

@@ -55,22 +55,30 @@ def _check_features(features: Tensor, what: str) -> Tensor:
     return features.detach().to(torch.float64)
 
 
-class _RealVsGenerated(Metric):
-    """Accumulates features of real and of generated samples in two "cat" states."""
+class _TwoStates(Metric):
+    """Accumulates two sets of feature rows in two "cat" states: ``STATES`` = ((state, what it holds), ...)."""
 
     full_state_update = False
     is_differentiable = False
+    STATES: tuple[tuple[str, str], tuple[str, str]]
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.add_state("real_features", [], dist_reduce_fx="cat")
-        self.add_state("fake_features", [], dist_reduce_fx="cat")
+        for state, _ in self.STATES:
+            self.add_state(state, [], dist_reduce_fx="cat")
+
+    def _both(self) -> tuple[Tensor, Tensor]:
+        name = type(self).__name__
+        first, second = (_gathered(getattr(self, state), f"{name} {what}") for state, what in self.STATES)
+        return first, second
+
+
+class _RealVsGenerated(_TwoStates):
+    """Features of real and of generated samples."""
+
+    STATES = (("real_features", "real"), ("fake_features", "generated"))
 
     def update(self, features: Tensor, real: bool) -> None:
         """features [N, D]: of real samples when ``real`` is true, of generated ones otherwise."""
         features = _check_features(features, type(self).__name__)
         (self.real_features if real else self.fake_features).append(features)
-
-    def _both(self) -> tuple[Tensor, Tensor]:
-        name = type(self).__name__
-        return _gathered(self.real_features, f"{name} real"), _gathered(self.fake_features, f"{name} generated")

@@ -113,6 +113,9 @@ def kid(
     return {"mean": float(np.mean(scores)), "std": float(np.std(scores))}
 
 
+KID_OPTIONS = ("num_subsets", "subset_size", "degree", "gamma", "coef")  # what the KID metric passes on to kid
+
+
 class KID(_RealVsGenerated):
     """KID: unbiased MMD² between real and generated features with k(x, y) = (gamma x·y + coef)^degree
     (gamma = 1/D by default), averaged over ``num_subsets`` seeded random subsets (``kid``).
@@ -120,32 +123,15 @@ class KID(_RealVsGenerated):
 
     higher_is_better = False
 
-    def __init__(
-        self,
-        num_subsets: int = 100,
-        subset_size: int = 1000,
-        degree: int = 3,
-        gamma: float | None = None,
-        coef: float = 1.0,
-        seed: int = 0,
-        **kwargs,
-    ):
+    def __init__(self, *, seed: int = 0, **kwargs):
+        """``kwargs``: ``kid``'s options (KID_OPTIONS, with its defaults) and the Metric's own keywords."""
+        options = {key: kwargs.pop(key) for key in KID_OPTIONS if key in kwargs}
         super().__init__(**kwargs)
-        self.num_subsets, self.subset_size, self.seed = num_subsets, subset_size, seed
-        self.degree, self.gamma, self.coef = degree, gamma, coef
+        self.options, self.seed = options, seed
 
     def compute(self) -> dict[str, Tensor]:
         real, fake = self._both()
-        scores = kid(
-            real,
-            fake,
-            num_subsets=self.num_subsets,
-            subset_size=self.subset_size,
-            degree=self.degree,
-            gamma=self.gamma,
-            coef=self.coef,
-            rng=np.random.default_rng(self.seed),
-        )
+        scores = kid(real, fake, rng=np.random.default_rng(self.seed), **self.options)
         return {key: torch.tensor(v, dtype=torch.float64, device=self.device) for key, v in scores.items()}
 
 

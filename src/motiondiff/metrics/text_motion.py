@@ -5,13 +5,12 @@ from __future__ import annotations
 import numpy as np
 import torch
 from torch import Tensor
-from torchmetrics import Metric
 
 from motiondiff.metrics._base import (
     _cdist,
     _check_features,
-    _gathered,
     _pairs,
+    _TwoStates,
 )
 
 
@@ -47,16 +46,10 @@ def mm_dist(text, motion) -> float:
     return float(np.linalg.norm(t - m, axis=1).mean())
 
 
-class _TextMotionPairs(Metric):
-    """Accumulates matched (text, motion) embedding pairs in order, in two "cat" states."""
+class _TextMotionPairs(_TwoStates):
+    """Matched (text, motion) embedding pairs, in order."""
 
-    full_state_update = False
-    is_differentiable = False
-
-    def __init__(self, **kwargs):
-        super().__init__(**kwargs)
-        self.add_state("text", [], dist_reduce_fx="cat")
-        self.add_state("motion", [], dist_reduce_fx="cat")
+    STATES = (("text", "text"), ("motion", "motion"))
 
     def update(self, text_emb: Tensor, motion_emb: Tensor) -> None:
         """text_emb, motion_emb [N, D]: row i of each is a matched pair."""
@@ -68,10 +61,6 @@ class _TextMotionPairs(Metric):
             )
         self.text.append(_check_features(text_emb, name))
         self.motion.append(_check_features(motion_emb, name))
-
-    def _both(self) -> tuple[Tensor, Tensor]:
-        name = type(self).__name__
-        return _gathered(self.text, f"{name} text"), _gathered(self.motion, f"{name} motion")
 
 
 class RPrecision(_TextMotionPairs):

@@ -13,10 +13,12 @@ structure the level refines, not text.
 
 from __future__ import annotations
 
+from typing import Any
+
 import torch
 from torch import Tensor, nn
 
-from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
+from motiondiff.models.backbones.encoder_layer import TransformerSize
 from motiondiff.models.embeddings import TimestepEmbedder
 from motiondiff.models.graph import NODE_KINDS, GraphBatch, SemanticGraphAttention
 from motiondiff.models.vae import LEVEL_TOKENS
@@ -34,14 +36,14 @@ class LatentDenoiser(nn.Module):
         previous_tokens: int,
         node_dim: int,
         latent_dim: int = 256,
-        d_model: int = 256,
-        num_layers: int = 4,
-        num_heads: int = 4,
-        ff_size: int = 1024,
-        dropout: float = 0.1,
+        *,
         kinds: tuple[int, ...] = (0,),
+        **size: Any,
     ):
+        """``size``: TransformerSize's fields (d_model, num_layers, ...), its defaults where not given."""
         super().__init__()
+        size = TransformerSize(**size)
+        d_model = size.d_model
         if d_model < latent_dim:  # ε is a full-rank latent_dim vector: a narrower stream cannot carry it through
             raise ValueError(f"the latent denoiser's d_model ({d_model}) must be at least the latent width "
                              f"({latent_dim}); raise latent.d_model or lower the VAEs' latent_dim")  # fmt: skip
@@ -55,8 +57,7 @@ class LatentDenoiser(nn.Module):
         if previous_tokens:
             self.previous_in = nn.Linear(latent_dim, d_model)
             self.previous_position = nn.Parameter(torch.randn(previous_tokens, d_model) * 0.02)
-        layer = FastDropoutEncoderLayer(d_model, num_heads, ff_size, dropout, activation="gelu", batch_first=True)
-        self.transformer = nn.TransformerEncoder(layer, num_layers, enable_nested_tensor=False)
+        self.transformer = nn.TransformerEncoder(size.layer(), size.num_layers, enable_nested_tensor=False)
         self.norm = nn.LayerNorm(d_model)
         self.out = nn.Linear(d_model, latent_dim)
 

@@ -7,13 +7,17 @@ GuidedMotion trains three independent VAEs with Q = 2 (motion level), 4 (action 
 
 from __future__ import annotations
 
+from dataclasses import asdict, replace
+from typing import Any
+
 import torch
 from torch import Tensor, nn
 
-from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
+from motiondiff.models.backbones.encoder_layer import TransformerSize
 from motiondiff.models.embeddings import SinusoidalPositionalEncoding
 
 LEVEL_TOKENS = {"motion": 2, "action": 4, "specific": 8}
+VAE_SIZE = TransformerSize(num_layers=9)  # MotionVAE's default sizes (MLD's 9 layers: 4 in, 1 middle, 4 out)
 
 
 class SkipTransformer(nn.Module):
@@ -24,9 +28,7 @@ class SkipTransformer(nn.Module):
         if num_layers < 1 or num_layers % 2 == 0:
             raise ValueError(f"a skip transformer needs an odd number of layers (in, middle, out), got {num_layers}")
 
-        def layer():
-            return FastDropoutEncoderLayer(d_model, num_heads, ff_size, dropout, activation="gelu", batch_first=True)
-
+        layer = TransformerSize(d_model, num_layers, num_heads, ff_size, dropout).layer
         half = num_layers // 2
         self.input_layers = nn.ModuleList(layer() for _ in range(half))
         self.middle = layer()
@@ -49,29 +51,23 @@ class MotionVAE(nn.Module):
     """features (B, N, D) with a valid-frame mask (B, N) <-> latent (B, Q, latent_dim)."""
 
     def __init__(
-        self,
-        feature_dim: int,
-        latent_tokens: int = 4,
-        latent_dim: int = 256,
-        d_model: int = 256,
-        num_layers: int = 9,
-        num_heads: int = 4,
-        ff_size: int = 1024,
-        dropout: float = 0.1,
-        max_frames: int = 196,
+        self, feature_dim: int, latent_tokens: int = 4, latent_dim: int = 256, *, max_frames: int = 196, **size: Any
     ):
+        """``size``: TransformerSize's fields (d_model, num_layers, ...), each VAE_SIZE's where not given."""
         super().__init__()
         if latent_tokens < 1:
             raise ValueError(f"latent_tokens (Q) must be >= 1, got {latent_tokens}")
+        size = replace(VAE_SIZE, **size)
+        d_model = size.d_model
         self.feature_dim, self.latent_tokens, self.latent_dim = feature_dim, latent_tokens, latent_dim
         self.max_frames = max_frames
         self.motion_in = nn.Linear(feature_dim, d_model)
         self.queries = nn.Parameter(torch.randn(latent_tokens, d_model) * 0.02)  # Q learnable query tokens
-        self.positions = SinusoidalPositionalEncoding(d_model, max_len=max_frames + latent_tokens, dropout=dropout)
-        self.encoder = SkipTransformer(d_model, num_layers, num_heads, ff_size, dropout)
+        self.positions = SinusoidalPositionalEncoding(d_model, max_len=max_frames + latent_tokens, dropout=size.dropout)
+        self.encoder = SkipTransformer(**asdict(size))
         self.to_gaussian = nn.Linear(d_model, 2 * latent_dim)  # mean and log-variance per token
         self.latent_in = nn.Linear(latent_dim, d_model)
-        self.decoder = SkipTransformer(d_model, num_layers, num_heads, ff_size, dropout)
+        self.decoder = SkipTransformer(**asdict(size))
         self.motion_out = nn.Linear(d_model, feature_dim)
 
     def _padding(self, mask: Tensor) -> Tensor:

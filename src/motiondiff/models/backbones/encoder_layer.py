@@ -10,6 +10,8 @@ parent's, and a checkpoint loads into either class.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 from torch import Tensor, nn
 
@@ -43,3 +45,19 @@ class FastDropoutEncoderLayer(nn.TransformerEncoderLayer):
         weights = fast_dropout(scores.softmax(dim=-1), attn.dropout, True)
         out = torch.matmul(weights, v).transpose(1, 2).reshape(b, n, d)
         return self.dropout1(attn.out_proj(out))
+
+
+@dataclass(frozen=True)
+class TransformerSize:
+    """The sizes of a stack of GELU ``FastDropoutEncoderLayer``s: GuidedMotion's VAEs and latent denoisers take them
+    as keyword arguments (the keys of ``vae`` and ``latent.model`` in conf/)."""
+
+    d_model: int = 256
+    num_layers: int = 4
+    num_heads: int = 4
+    ff_size: int = 1024
+    dropout: float = 0.1
+
+    def layer(self) -> FastDropoutEncoderLayer:
+        return FastDropoutEncoderLayer(self.d_model, self.num_heads, self.ff_size, self.dropout, activation="gelu",
+                                       batch_first=True)  # fmt: skip

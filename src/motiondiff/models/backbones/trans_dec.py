@@ -9,40 +9,24 @@ paper lists 26.29 M parameters instead of 17.88 M. The paper found both variants
 
 from __future__ import annotations
 
+from typing import Any
+
 import torch
 from torch import Tensor, nn
 
-from motiondiff.models.embeddings import SinusoidalPositionalEncoding
+from motiondiff.models.backbones.transformer import TransformerBackbone
 
 
-class TransDecBackbone(nn.Module):
+class TransDecBackbone(TransformerBackbone):
     """frames (+ positions) -> nn.TransformerDecoder(tgt = frames, memory = [token]) -> frames.
 
     `input_token=True` is MDM's "decoder + input token": the token is also prepended to the frames (its output is
     dropped). Post-norm layers and no final norm, like trans_enc and PyTorch's defaults.
     """
 
-    def __init__(
-        self,
-        d_model: int,
-        num_layers: int,
-        num_heads: int,
-        ff_size: int,
-        dropout: float = 0.1,
-        activation: str = "gelu",
-        max_len: int = 5000,
-        input_token: bool = False,
-    ):
-        super().__init__()
-        if d_model % num_heads:
-            raise ValueError(f"d_model={d_model} must be divisible by num_heads={num_heads}")
-        self.d_model = d_model
+    def build(self, layer_args: dict[str, Any], num_layers: int, input_token: bool = False) -> None:
         self.input_token = bool(input_token)
-        self.pos_encoding = SinusoidalPositionalEncoding(d_model, max_len=max_len, dropout=dropout)
-        layer = nn.TransformerDecoderLayer(
-            d_model, num_heads, dim_feedforward=ff_size, dropout=dropout, activation=activation, batch_first=True
-        )
-        self.decoder = nn.TransformerDecoder(layer, num_layers=num_layers)
+        self.decoder = nn.TransformerDecoder(nn.TransformerDecoderLayer(**layer_args), num_layers=num_layers)
 
     def forward(self, h: Tensor, token: Tensor, mask: Tensor | None = None) -> Tensor:
         seq = torch.cat([token.unsqueeze(1), h], dim=1) if self.input_token else h

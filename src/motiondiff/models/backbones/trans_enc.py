@@ -2,40 +2,27 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import torch
 from torch import Tensor, nn
 
 from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
-from motiondiff.models.embeddings import SinusoidalPositionalEncoding
+from motiondiff.models.backbones.transformer import TransformerBackbone
 
 
-class TransEncBackbone(nn.Module):
+class TransEncBackbone(TransformerBackbone):
     """[token, frames] + sinusoidal positions -> nn.TransformerEncoder -> frames (the token's output is dropped).
 
     Post-norm layers as in MDM (PyTorch defaults). batch_first=True lets PyTorch use its fused inference fast path;
     training drops out with a cheaper mask (``FastDropoutEncoderLayer``, the same parameters).
     """
 
-    def __init__(
-        self,
-        d_model: int,
-        num_layers: int,
-        num_heads: int,
-        ff_size: int,
-        dropout: float = 0.1,
-        activation: str = "gelu",
-        max_len: int = 5000,
-    ):
-        super().__init__()
-        if d_model % num_heads:
-            raise ValueError(f"d_model={d_model} must be divisible by num_heads={num_heads}")
-        self.d_model = d_model
-        self.pos_encoding = SinusoidalPositionalEncoding(d_model, max_len=max_len, dropout=dropout)
-        layer = FastDropoutEncoderLayer(
-            d_model, num_heads, dim_feedforward=ff_size, dropout=dropout, activation=activation, batch_first=True
-        )
+    def build(self, layer_args: dict[str, Any], num_layers: int) -> None:
         # No nested tensors: they are a prototype API (warns on every padded eval call); the fused fast path stays.
-        self.encoder = nn.TransformerEncoder(layer, num_layers=num_layers, enable_nested_tensor=False)
+        self.encoder = nn.TransformerEncoder(
+            FastDropoutEncoderLayer(**layer_args), num_layers=num_layers, enable_nested_tensor=False
+        )
 
     def forward(self, h: Tensor, token: Tensor, mask: Tensor | None = None) -> Tensor:
         seq = self.pos_encoding(torch.cat([token.unsqueeze(1), h], dim=1))  # positions cover the token too (MDM)
