@@ -21,13 +21,13 @@ import torch
 
 from motiondiff.data.representations import Representation
 from motiondiff.edit.blend import DEFAULT_FRAMES, blend_boundaries
-from motiondiff.edit.inpaint import SamplingOptions, inpaint
+from motiondiff.edit.inpaint import SamplingOptions
 from motiondiff.edit.inputs import InputMotion
 from motiondiff.edit.masks import EditError, frame_keep, resolve_joints, to_frames
 from motiondiff.edit.trajectory import close_root_path, needs_root_closure
 from motiondiff.geometry.skeleton import Skeleton
-from motiondiff.lit.conditions import check_action, condition_batch
-from motiondiff.lit.generation import SAMPLE_BATCH, check_finite_output
+from motiondiff.lit.conditions import check_action
+from motiondiff.lit.generation import generate_features
 
 
 @dataclass
@@ -105,37 +105,14 @@ def _generator(module, generator: torch.Generator | None, seed: int | None) -> t
     return torch.Generator(device=module.device).manual_seed(int(seed))
 
 
-@torch.inference_mode()
 def _inpaint_motions(module, motions, keeps, conds, num_samples, options, generator, progress) -> list[np.ndarray]:
-    """De-normalised features of num_samples edits per motion (SAMPLE_BATCH edits at a time, padded), the input's
-    features exact where ``keeps[m]`` (N, D, bool)."""
-
+    """De-normalised features of num_samples edits per motion, motion-major, through the one generation chain with
+    their known frames (SAMPLE_BATCH edits at a time, padded): the input's features exact where ``keeps[m]``."""
     order = [m for m in range(len(motions)) for _ in range(num_samples)]
-    out = []
-    for s in range(0, len(order), SAMPLE_BATCH):
-        out += _inpaint_batch(module, motions, keeps, conds, order[s : s + SAMPLE_BATCH], options, generator, progress)
-    return out
-
-
-def _inpaint_batch(module, motions, keeps, conds, order, options, generator, progress) -> list[np.ndarray]:
-
-    knowns = [m.features for m in motions]
-    lengths = torch.tensor([len(knowns[m]) for m in order])
-    b, n, d = len(order), int(lengths.max()), module.representation.dim
-    known = torch.zeros(b, n, d)
-    keep = torch.zeros(b, n, d, dtype=torch.bool)
-    for k, m in enumerate(order):
-        known[k, : lengths[k]] = torch.from_numpy(np.asarray(knowns[m], dtype=np.float32))
-        keep[k, : lengths[k]] = torch.from_numpy(keeps[m])
-    known = module.normalise(known)
-    cond = None if conds[0] is None else condition_batch(module, [conds[m] for m in order])
-    out = inpaint(
-        module, cond, known, keep, lengths, generator=generator, progress=progress, **options.inpaint_kwargs()
-    )
-    feats = module.denormalise(out).float().cpu().numpy()
-    check_finite_output(feats, "the edited motion")
-    # the kept part is the input's own numbers (not normalised and back, which rounds in float32)
-    return [np.where(keeps[m], knowns[m], feats[k, : lengths[k]]) for k, m in enumerate(order)]
+    known = [motions[m].features for m in order]
+    return generate_features(module, [conds[m] for m in order], torch.tensor([len(f) for f in known]),
+                             generator=generator, known=known, keep=[keeps[m] for m in order],
+                             what="the edited motion", progress=progress, **options.inpaint_kwargs())  # fmt: skip
 
 
 def _result(module, kind, motions, conds, keeps, kept_frames, kept_joints, features, num_samples, settings):

@@ -1,9 +1,9 @@
 """The one generation chain: conditions -> the model's condition batches -> sampling -> de-normalised features.
 
 Every caller that makes motion from prompts, actions or nothing (the pipelines, sample.py, the evaluation protocol,
-the behaviour report) goes through `generate_features`; editing adds its known frames through `module.sample` and
-GuidedMotion samples its own latent levels. Every one of them checks its output with `check_finite_output` before
-anything is written: a NaN motion is one error line, never a file of NaNs.
+the behaviour report) goes through `generate_features`, and so does editing, with its known frames (in-painting,
+`lit.inpainting`); GuidedMotion samples its latent levels in `pipelines.guided`. Every one of them checks its output
+with `check_finite_output` before anything is written: a NaN motion is one error line, never a file of NaNs.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import numpy as np
 import torch
 
 from motiondiff.lit.conditions import condition_batch
+from motiondiff.lit.inpainting import inpaint, known_batch
 from motiondiff.models.bf16_inference import bf16_inference
 from motiondiff.runtime.errors import UsageError
 
@@ -80,6 +81,10 @@ def generate_features(
     generator: torch.Generator | None = None,
     bar=None,
     precision: str = "32-true",
+    *,
+    known: list | None = None,
+    keep: list | None = None,
+    what: str = "the generated motion",
     **sampling,
 ) -> list[np.ndarray]:
     """De-normalised features (N_i, D), one per condition (prompt, action name/id or None), at the given lengths.
@@ -88,22 +93,39 @@ def generate_features(
     length so each batch pads little; `bar` (a tqdm bar or None) is advanced per motion; `precision` "bf16-mixed" runs
     the denoiser under bf16 autocast (as such models train), anything else in full precision. On the CPU, with a
     deterministic sampler (DDIM with eta=0, DPM-Solver++) and equal lengths, batches of SAMPLE_BATCH give the motions
-    of one batch up to float rounding (torch draws CPU noise 16 values at a time, in one stream)."""
+    of one batch up to float rounding (torch draws CPU noise 16 values at a time, in one stream).
+
+    Editing: ``known`` (de-normalised features (N_i, D) per item) and ``keep`` ((N_i, D) bool) hold each item's known
+    part (`lit.inpainting.inpaint`, with `sampling`'s mode, hold_from and reconstruction); the result is the input's
+    own numbers there. Edits are batched in the order given (a seed draws the noise it drew before editing came
+    through this chain). ``what`` names the motion in the non-finite error."""
     lengths = torch.as_tensor(lengths)
     if len(conditions) != len(lengths):
         raise ValueError(f"{len(conditions)} conditions for {len(lengths)} lengths")
-    order = torch.argsort(lengths, descending=True, stable=True)  # equal lengths keep their order
+    if known is not None and (keep is None or not len(known) == len(keep) == len(lengths)):
+        raise ValueError(f"give one known motion and one keep mask per length ({len(lengths)}), got {len(known)} "
+                         f"and {None if keep is None else len(keep)}")  # fmt: skip
+    if known is None:
+        order = torch.argsort(lengths, descending=True, stable=True)  # equal lengths keep their order
+    else:
+        order = torch.arange(len(lengths))
     results: dict[int, np.ndarray] = {}
     for s in range(0, len(order), batch_size):
         idx = order[s : s + batch_size].tolist()
         cond = condition_batch(module, [conditions[i] for i in idx])
         lens = lengths[idx]
         with sampling_precision(module, precision):
-            feats = module.sample(cond, lens, generator=generator, **sampling)
+            if known is None:
+                feats = module.sample(cond, lens, generator=generator, **sampling)
+            else:
+                x_known, x_keep = known_batch(module, known, keep, idx)
+                feats = inpaint(module, cond, x_known, x_keep, lens, generator=generator, **sampling)
         feats = module.denormalise(feats.float()).cpu().numpy()
-        check_finite_output(feats)
+        check_finite_output(feats, what)
         for row, i in enumerate(idx):
             results[i] = feats[row, : int(lengths[i])]
+            if known is not None:  # the kept part is the input's own numbers (not normalised and back)
+                results[i] = np.where(keep[i], known[i], results[i])
         if bar is not None:
             bar.update(len(idx))
     return [results[i] for i in range(len(conditions))]

@@ -11,16 +11,18 @@ your own descriptions, encoded at the action level, and pulled towards with ener
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import torch
 
 from motiondiff.data.representations.spec import bridge_from_spec
+from motiondiff.diffusion.energy_guidance import DEFAULT_RHO
 from motiondiff.guided.local_actions import (
     LocalActionError,
+    LocalActions,
     check_weights,
-    guided_sample,
     local_actions_for,
     local_descriptions,
 )
@@ -29,10 +31,13 @@ from motiondiff.lit.generation import SAMPLE_BATCH, check_finite_output, check_n
 from motiondiff.lit.latent import LATENT_SAMPLERS, HierarchicalLatentModule
 from motiondiff.model_files.loading import load_latent_model, load_model
 from motiondiff.model_files.resolve import find_model
+from motiondiff.models.graph import batch_graphs
 from motiondiff.models.hierarchical import LEVELS
 from motiondiff.pipelines.output import MotionOutput
 from motiondiff.runtime.errors import UsageError
 from motiondiff.text.encoders import build_text_encoder
+from motiondiff.text.graph_features import node_features as _node_features
+from motiondiff.text.parse import ROLES, CaptionGraph
 
 
 def level_steps_of(latent: HierarchicalLatentModule, level_steps=None) -> dict[str, int]:
@@ -103,18 +108,14 @@ class GuidedMotionPipeline:
         try:
             _, described = local_descriptions(text)
             check_weights(local_weights, len(described))
-            if self.local_model is None and local_actions is None:
-                raise LocalActionError("no local_model to generate the local actions: give local_actions=[...]")
-            graph, local = local_actions_for(self.latent, text, mdm=self.local_model, texts=local_actions,
-                                             frames=frames, candidates=int(local_candidates), choose=local_choice,
-                                             generator=generator)  # fmt: skip
-            feats = guided_sample(self.latent, graph, self._text_encoder(), local, torch.full((num_samples,), frames),
-                                  weights=local_weights, guidance=guidance, steps=steps, rho=float(rho),
-                                  generator=generator, sampler=sampler)  # fmt: skip
+            graph, local = self.plan_local_actions(text, frames=frames, texts=local_actions,
+                                                   candidates=int(local_candidates), choose=local_choice,
+                                                   generator=generator)  # fmt: skip
+            copies = self.caption_copies(graph, local, num_samples, local_weights)
         except LocalActionError as err:
             raise UsageError(str(err)) from None
-        feats = [f for f in self.latent.denormalise(feats).cpu().numpy()]
-        check_finite_output(feats, "the GuidedMotion motion")
+        feats = self.sample_features(lengths=torch.full((num_samples,), frames), **copies, guidance=guidance,
+                                     steps=steps, rho=float(rho), generator=generator, sampler=sampler)  # fmt: skip
         rep = self.latent.decoder.representation
         joints = [rep.decode_numpy(f).astype(np.float32) for f in feats]
         weights = [1.0] * len(local.texts) if local_weights is None else [float(w) for w in local_weights]
@@ -126,7 +127,77 @@ class GuidedMotionPipeline:
         bridge = bridge_from_spec(hp.get("representation"), hp.get("feature_dim"))
         return MotionOutput(joints, feats, [text] * num_samples, self.fps, rep.skeleton, rep, info, bridge)
 
-    def _text_encoder(self):
+    @property
+    def text_encoder(self):
+        """The latent model's text encoder (built on first use), which gives the caption graphs' node features."""
         if self._encoder is None:
             self._encoder = build_text_encoder(**text_encoder_kwargs(self.latent.hparams.text_encoder))
         return self._encoder
+
+    def plan_local_actions(
+        self,
+        text: str,
+        *,
+        frames: int,
+        texts: Sequence[str] | None = None,
+        candidates: int = 1,
+        choose: int | Sequence[int] = 0,
+        generator: torch.Generator | None = None,
+    ) -> tuple[CaptionGraph, LocalActions]:
+        """The caption's graph and its local actions, made once (by ``local_model`` from ``texts``, default the
+        caption's own descriptions) and then sampled with at any weights."""
+        if self.local_model is None and texts is None:
+            raise LocalActionError("no local_model to generate the local actions: give local_actions=[...]")
+        return local_actions_for(self.latent, text, mdm=self.local_model, texts=texts, frames=frames,
+                                 candidates=candidates, choose=choose, generator=generator)  # fmt: skip
+
+    def caption_copies(self, graph: CaptionGraph, local: LocalActions, count: int, weights=None) -> dict:
+        """``sample_features``' graphs, node features, local latents and weights for ``count`` samples of one caption
+        (``weights``: one per local action, default 1; checked)."""
+        w = check_weights(weights, local.latents.shape[0])
+        feats = _node_features([graph], self.text_encoder)[0].float()
+        return {"graphs": [graph] * count, "node_features": [feats] * count,
+                "local_latents": local.latents[None].expand(count, -1, -1, -1),
+                "local_weights": w[None].expand(count, -1)}  # fmt: skip
+
+    def sample_features(
+        self,
+        graphs: Sequence[CaptionGraph],
+        lengths: torch.Tensor,
+        *,
+        node_features: Sequence[torch.Tensor] | None = None,
+        local_latents: torch.Tensor | None = None,
+        local_weights: torch.Tensor | None = None,
+        steps: dict[str, int] | None = None,
+        final_level: str = "specific",
+        sampler: str | None = None,
+        guidance: float | None = None,
+        rho: float = DEFAULT_RHO,
+        generator: torch.Generator | None = None,
+        return_latents: bool = False,
+        batch_size: int = SAMPLE_BATCH,
+    ):
+        """De-normalised features (N_i, D), one per caption graph at its length, checked finite: ``batch_size``
+        captions at a time in the order given. ``node_features``: one (n_i, E) per graph (None: from the text
+        encoder); ``local_latents`` (B, A, Q_a, D') and ``local_weights`` (B, A): the energy guidance (None: off);
+        the rest as ``HierarchicalLatentModule.sample``. ``return_latents``: also each level's latents (B, Q, D')."""
+        lengths = torch.as_tensor(lengths)
+        if node_features is None:
+            node_features = [f.float() for f in _node_features(list(graphs), self.text_encoder)]
+        out, latents = [], {}
+        for s in range(0, len(graphs), batch_size):
+            part = slice(s, s + batch_size)
+            batch = batch_graphs(graphs[part], node_features[part], ROLES).to(self.latent.device)
+            guided = {} if local_latents is None else {"local_latents": local_latents[part]}
+            if local_weights is not None:
+                guided["local_weights"] = local_weights[part]
+            feats, levels = self.latent.sample(batch, lengths[part], guidance=guidance, steps=steps, rho=rho,
+                                               generator=generator, return_latents=True, final_level=final_level,
+                                               sampler=sampler, **guided)  # fmt: skip
+            feats = self.latent.denormalise(feats).cpu().numpy()
+            check_finite_output(feats, "the GuidedMotion motion")
+            out += [feats[i, : int(n)] for i, n in enumerate(lengths[part])]
+            if return_latents:
+                for level, z in levels.items():
+                    latents.setdefault(level, []).append(z)
+        return (out, {k: torch.cat(v) for k, v in latents.items()}) if return_latents else out

@@ -27,16 +27,14 @@ import torch
 
 from motiondiff.bench.timing import median_seconds as timed_median
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
-from motiondiff.lit.conditions import condition_batch, text_encoder_kwargs
+from motiondiff.lit.conditions import condition_batch
 from motiondiff.model_files.loading import load_latent_model
 from motiondiff.model_files.loading import load_model as load_module
 from motiondiff.model_files.resolve import find_model
-from motiondiff.models.graph import batch_graphs
 from motiondiff.runtime.atomic import finite_or_null, write_json
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.paths import REPO_DIR, shown
 from motiondiff.studies.config import study_config
-from motiondiff.text.encoders import build_text_encoder
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "comparison"
 # Tab. 4's rows: (level the hierarchy stops at and decodes, local-action energy guidance on)
@@ -69,23 +67,15 @@ def local_latents(latent, mdm, graphs, frames: int, generator: torch.Generator, 
     return out
 
 
-def guided_features(latent, table, captions, lengths, steps, final_level, refs, generator, batch_size=64):
-    """De-normalised GuidedMotion features, one per caption, at its length (``refs``: local latents or None)."""
-    from motiondiff.text.parse import ROLES  # lazy: spacy (+0.7 s to import)
-
-    out = []
-    for s in range(0, len(captions), batch_size):
-        chunk = captions[s : s + batch_size]
-        graphs = batch_graphs([table[c][0] for c in chunk], [table[c][1] for c in chunk], ROLES)
-        lens = lengths[s : s + batch_size]
-        kwargs = {} if refs is None else {"local_latents": refs[s : s + batch_size]}
-        feats = latent.sample(graphs, lens, steps=steps, final_level=final_level, generator=generator, **kwargs)
-        feats = latent.denormalise(feats).cpu().numpy()
-        out += [feats[i, : int(n)] for i, n in enumerate(lens)]
-    return out
+def guided_features(pipe, table, captions, lengths, steps, final_level, refs, generator):
+    """De-normalised GuidedMotion features, one per caption, at its length (``refs``: local latents or None), through
+    the pipeline's batched sampling (checked finite)."""
+    graphs, feats = [table[c][0] for c in captions], [table[c][1] for c in captions]
+    return pipe.sample_features(graphs, lengths, node_features=feats, local_latents=refs, steps=steps,
+                                final_level=final_level, generator=generator)  # fmt: skip
 
 
-def replication(latent, mdm, local_mdm, evaluators, clips, table, r: int, args: dict) -> dict[str, dict]:
+def replication(pipe, mdm, evaluators, clips, table, r: int, args: dict) -> dict[str, dict]:
     from motiondiff.eval.protocol import generate, replication_metrics  # lazy: torchmetrics (+2.6 s to import)
 
     seed = int(args["seed"]) * 1000 + r
@@ -94,11 +84,11 @@ def replication(latent, mdm, local_mdm, evaluators, clips, table, r: int, args: 
     real = evaluators.embed_motion(clips.features)
     text = evaluators.embed_text(captions)
     graphs = [table[c][0] for c in captions]
-    refs = local_latents(latent, local_mdm, graphs, args["local_frames"], torch.Generator().manual_seed(seed),
-                         args["mdm_steps"])  # fmt: skip
+    gen = torch.Generator().manual_seed(seed)
+    refs = local_latents(pipe.latent, pipe.local_model, graphs, args["local_frames"], gen, args["mdm_steps"])
     rows = {}
     for name, (level, guided) in ABLATION.items():
-        feats = guided_features(latent, table, captions, lengths, args["level_steps"], level, refs if guided else None,
+        feats = guided_features(pipe, table, captions, lengths, args["level_steps"], level, refs if guided else None,
                                 torch.Generator().manual_seed(seed))  # fmt: skip
         rows[name] = replication_metrics("text", evaluators, real, evaluators.embed_motion(feats), text=text, seed=seed)
     feats = generate(mdm, captions, lengths, generator=torch.Generator().manual_seed(seed),
@@ -113,27 +103,24 @@ def median_seconds(fn, repeats: int) -> float:
     return timed_median(fn, repeats=repeats, warmup=1)["median_s"]
 
 
-def sampling_times(latent, mdm, local_mdm, table, caption: str, frames: int, args: dict) -> dict[str, float]:
+def sampling_times(pipe, mdm, table, caption: str, frames: int, args: dict) -> dict[str, float]:
     """Median seconds for one motion of ``frames`` frames from ``caption``, guidance on, in this process."""
-    from motiondiff.text.parse import ROLES  # lazy: spacy (+0.7 s to import)
-
     graph, feats = table[caption]
-    graphs = batch_graphs([graph], [feats], ROLES)
     lengths = torch.tensor([frames])
-    refs = local_latents(latent, local_mdm, [graph], args["local_frames"], torch.Generator().manual_seed(0),
-                         args["mdm_steps"])  # fmt: skip
+
+    def plan():  # the local actions' latents (MDM motions + action-VAE encoding)
+        gen = torch.Generator().manual_seed(0)
+        return local_latents(pipe.latent, pipe.local_model, [graph], args["local_frames"], gen, args["mdm_steps"])
+
+    refs = plan()
     steps, repeats = args["level_steps"], args["timing_repeats"]
     cond = condition_batch(mdm, [caption])
     times = {
         "guidedmotion_latent_s": median_seconds(
-            lambda: latent.sample(graphs, lengths, steps=steps, local_latents=refs), repeats
-        ),
-        "guidedmotion_local_actions_s": median_seconds(
-            lambda: local_latents(
-                latent, local_mdm, [graph], args["local_frames"], torch.Generator().manual_seed(0), args["mdm_steps"]
-            ),
+            lambda: pipe.sample_features([graph], lengths, node_features=[feats], steps=steps, local_latents=refs),
             repeats,
         ),
+        "guidedmotion_local_actions_s": median_seconds(plan, repeats),
         "mdm_s": median_seconds(
             lambda: mdm.sample(cond, lengths, guidance=mdm.default_guidance, sampler="ddim", steps=args["mdm_steps"]),
             repeats,
@@ -210,6 +197,7 @@ def main(argv: list[str] | None = None) -> int:
     from motiondiff.data.datamodules import PreparedDataModule  # lazy: lightning (+4.4 s to import)
     from motiondiff.eval.protocol import EvalClips, Evaluators  # lazy: torchmetrics (+2.6 s to import)
     from motiondiff.guided.local_actions import check_same_features  # lazy: spacy (+0.7 s to import)
+    from motiondiff.pipelines.guided import GuidedMotionPipeline  # lazy: lightning, spacy (+5.1 s to import)
     from motiondiff.text.graph_features import graph_table  # lazy: spacy (+0.7 s to import)
 
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -224,6 +212,7 @@ def main(argv: list[str] | None = None) -> int:
     local_mdm = mdm if local_path == mdm_path else load_module(local_path)
     check_same_features(local_mdm, latent)
     check_same_features(mdm, latent)
+    pipe = GuidedMotionPipeline(latent, local_mdm, str(latent_path))
     settings = {
         "replications": cfg.replications,
         "level_steps": dict(zip(("motion", "action", "specific"), cfg.level_steps, strict=True)),
@@ -238,17 +227,16 @@ def main(argv: list[str] | None = None) -> int:
     clips = EvalClips.from_dataset(dm.dataset("test"))
     evaluator_dir = Path(cfg.evaluators or REPO_DIR / "checkpoints" / "evaluators" / data.name)
     evaluators = Evaluators.load(evaluator_dir).for_module(mdm)
-    encoder = build_text_encoder(**text_encoder_kwargs(latent.hparams.text_encoder))
-    table = graph_table([c for caps in clips.captions for c in caps], encoder)
+    table = graph_table([c for caps in clips.captions for c in caps], pipe.text_encoder)
     timing_only = cfg.timing_only
     rows: dict[str, list[dict]] = {}
     for r in range(0 if timing_only else settings["replications"]):
         start = time.perf_counter()
-        for name, metrics in replication(latent, mdm, local_mdm, evaluators, clips, table, r, settings).items():
+        for name, metrics in replication(pipe, mdm, evaluators, clips, table, r, settings).items():
             rows.setdefault(name, []).append(metrics)
         print(f"replication {r + 1}/{settings['replications']} in {time.perf_counter() - start:.0f} s", flush=True)
     frames = int(clips.lengths.max())
-    times = {"frames": frames, **sampling_times(latent, mdm, local_mdm, table, clips.captions[0][0], frames, settings)}
+    times = {"frames": frames, **sampling_times(pipe, mdm, table, clips.captions[0][0], frames, settings)}
     latent_run, mdm_run = training_seconds(latent_path), training_seconds(mdm_path)
     training = {"GuidedMotion latent stage": (latent_run or {}).get("train_seconds", "unknown")}
     for level, path in ((latent_run or {}).get("vaes") or {}).items():

@@ -22,7 +22,6 @@ import numpy as np
 import torch
 
 from motiondiff.eval.report import mean_ci
-from motiondiff.lit.conditions import text_encoder_kwargs
 from motiondiff.model_files.loading import load_latent_model
 from motiondiff.model_files.loading import load_model as load_module
 from motiondiff.model_files.resolve import find_model
@@ -30,7 +29,6 @@ from motiondiff.runtime.atomic import finite_or_null, write_json
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.paths import REPO_DIR
 from motiondiff.studies.config import study_config
-from motiondiff.text.encoders import build_text_encoder
 
 DEFAULT_OUT = REPO_DIR / "docs" / "results" / "guidedmotion" / "weight_control"
 MOVING = ("walk", "run", "dash", "jog", "step")
@@ -46,11 +44,11 @@ def root_travel(joints: np.ndarray) -> float:
     return float(np.linalg.norm(joints[-1, 0, [0, 2]] - joints[0, 0, [0, 2]]))
 
 
-def run_caption(module, mdm, encoder, evaluators, text, frames, weights, samples, steps, seed, **sample_kwargs):
-    from motiondiff.guided.local_actions import guided_sample, local_actions_for  # lazy: spacy (+0.7 s to import)
-
-    gen = torch.Generator().manual_seed(seed)
-    graph, local = local_actions_for(module, text, mdm=mdm, frames=frames, generator=gen)
+def run_caption(pipe, evaluators, text, frames, weights, samples, steps, seed, **sample_kwargs):
+    """One caption's rows: its local actions planned once, then sampled at each weight of the guided action from the
+    same noise (``pipe``: a GuidedMotionPipeline)."""
+    module = pipe.latent
+    graph, local = pipe.plan_local_actions(text, frames=frames, generator=torch.Generator().manual_seed(seed))
     k = guided_index(local.texts)
     local_feats = local.motions[k].to(module.device)
     local_embedding = evaluators.embed_motion([local_feats.cpu().numpy()])["text_motion"]
@@ -58,13 +56,13 @@ def run_caption(module, mdm, encoder, evaluators, text, frames, weights, samples
     for w in weights:
         user = [1.0] * len(local.texts)
         user[k] = float(w)
-        feats, latents = guided_sample(module, graph, encoder, local, torch.full((samples,), frames), weights=user,
-                                       steps=steps, generator=torch.Generator().manual_seed(seed + 1),
-                                       return_latents=True, **sample_kwargs)  # fmt: skip
+        feats, latents = pipe.sample_features(lengths=torch.full((samples,), frames),
+                                              **pipe.caption_copies(graph, local, samples, user), steps=steps,
+                                              generator=torch.Generator().manual_seed(seed + 1), return_latents=True,
+                                              **sample_kwargs)  # fmt: skip
         distance = (latents["action"] - local.latents[k]).flatten(1).norm(dim=1)
-        decoded = module.denormalise(feats)
-        joints = module.joints(decoded).cpu().numpy()
-        embedding = evaluators.embed_motion(list(decoded.cpu().numpy()))["text_motion"]
+        joints = module.joints(torch.from_numpy(np.stack(feats))).cpu().numpy()
+        embedding = evaluators.embed_motion(feats)["text_motion"]
         rows.append({"weight": float(w), "latent_distance": distance.tolist(),
                      "root_travel_m": [root_travel(j) for j in joints],
                      "motion_distance": np.linalg.norm(embedding - local_embedding, axis=1).tolist()})  # fmt: skip
@@ -157,6 +155,7 @@ def write(out: Path, meta: dict, results: list[dict], summary: dict) -> None:
 def main(argv: list[str] | None = None) -> int:
     from motiondiff.data.datamodules import PreparedDataModule  # lazy: lightning (+4.4 s to import)
     from motiondiff.eval.protocol import Evaluators  # lazy: torchmetrics (+2.6 s to import)
+    from motiondiff.pipelines.guided import GuidedMotionPipeline  # lazy: lightning, spacy (+5.1 s to import)
 
     cfg = study_config("weight_control", argv if argv is not None else sys.argv[1:])
     if cfg.final_level not in ("action", "specific"):
@@ -166,9 +165,8 @@ def main(argv: list[str] | None = None) -> int:
     if len(cfg.level_steps) != 3:
         raise UsageError(f"level_steps must be three numbers [motion, action, specific], got {list(cfg.level_steps)}")
     ckpt = Path(cfg.checkpoint)
-    module = load_latent_model(ckpt)
     mdm = load_module(find_model(cfg.local_model, REPO_DIR / "outputs"))
-    encoder = build_text_encoder(**text_encoder_kwargs(module.hparams.text_encoder))
+    pipe = GuidedMotionPipeline(load_latent_model(ckpt), mdm, str(ckpt))
     data = Path(cfg.data or REPO_DIR / "data" / "bandai_mini_compositional")
     evaluators = Evaluators.load(REPO_DIR / "checkpoints" / "evaluators" / data.name).for_module(mdm)
     weights = list(cfg.weights)
@@ -180,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
     records = dm.dataset("test").records[: cfg.captions]
     results = []
     for i, rec in enumerate(records):
-        results.append(run_caption(module, mdm, encoder, evaluators, rec.texts[0], FRAMES, weights, samples, steps, seed + i,
+        results.append(run_caption(pipe, evaluators, rec.texts[0], FRAMES, weights, samples, steps, seed + i,
                                    **sample_kwargs))  # fmt: skip
         print(f"[{i + 1}/{len(records)}] {rec.texts[0][:70]!r}: guided {results[-1]['guided_text']!r}", flush=True)
     meta = {"checkpoint": str(ckpt), "local_model": cfg.local_model, "weights": weights,

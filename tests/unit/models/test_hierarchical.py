@@ -4,6 +4,7 @@ action's energy guidance pulls the action latent towards that action's latent as
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 import torch
 
@@ -186,8 +187,38 @@ def test_energy_guidance_pulls_the_action_latent_towards_a_local_action(setup, s
         module.sample(graphs, lengths, steps={"motion": 2, "action": 2, "specific": 2}, local_latents=target[:, :1])
 
 
-def test_local_actions_from_given_motions_steer_the_sample(setup):
-    from motiondiff.guided.local_actions import LocalActionError, guided_sample, local_actions_for
+def test_guided_pipeline_samples_captions_in_batches_in_the_given_order(setup, monkeypatch):
+    """GuidedMotionPipeline.sample_features: one batch is the latent model's own sample, de-normalised and cut to each
+    caption's length; smaller batches keep the order and concatenate the level latents; a NaN motion is one error."""
+    from motiondiff.lit.generation import NonFiniteOutput
+    from motiondiff.pipelines.guided import GuidedMotionPipeline
+
+    module, _ = setup
+    graphs, feats = _graphs(CAPTIONS)
+    lengths = torch.tensor([20, 12, 16])
+    steps = {"motion": 2, "action": 2, "specific": 2}
+    pipe = GuidedMotionPipeline(module)
+    out = pipe.sample_features(graphs, lengths, node_features=feats, steps=steps,
+                               generator=torch.Generator().manual_seed(0))  # fmt: skip
+    direct = module.sample(batch_graphs(graphs, feats, ROLES), lengths, steps=steps,
+                           generator=torch.Generator().manual_seed(0))  # fmt: skip
+    direct = module.denormalise(direct).numpy()
+    assert [len(f) for f in out] == [20, 12, 16]
+    for i, n in enumerate(lengths.tolist()):
+        np.testing.assert_array_equal(out[i], direct[i, :n])
+    split, latents = pipe.sample_features(graphs, lengths, node_features=feats, steps=steps, final_level="action",
+                                          return_latents=True, batch_size=2)  # fmt: skip
+    assert [len(f) for f in split] == [20, 12, 16]
+    assert {k: tuple(v.shape) for k, v in latents.items()} == {"motion": (3, 2, 16), "action": (3, 4, 16)}
+    nan = torch.full((3, 20, direct.shape[-1]), float("nan"))
+    monkeypatch.setattr(module, "sample", lambda *args, **kwargs: (nan, {}))
+    with pytest.raises(NonFiniteOutput, match="the GuidedMotion motion holds"):
+        pipe.sample_features(graphs, lengths, node_features=feats, steps=steps)
+
+
+def test_local_actions_from_given_motions_steer_the_sample(setup, monkeypatch):
+    from motiondiff.guided.local_actions import LocalActionError, local_actions_for
+    from motiondiff.pipelines import guided
 
     module, batch = setup
     motions = [module.denormalise(batch["motion"][k, :20]) for k in (0, 1)]  # two real clips as the local actions
@@ -198,22 +229,18 @@ def test_local_actions_from_given_motions_steer_the_sample(setup):
     assert torch.allclose(local.latents[:1], expected, atol=1e-5)
 
     # node features without loading a text model: the module was built with 8-d random ones
-    from motiondiff.guided import local_actions as la
-
     feats = module.graph_table[CAPTIONS[0]][1]
-    original = la.graph_batch
-    la.graph_batch = lambda latent, g, enc, copies=1: batch_graphs([g] * copies, [feats] * copies, ROLES)
-    try:
-        kwargs = dict(steps={"motion": 3, "action": 3, "specific": 3}, rho=0.05)
-        out = {w: guided_sample(module, graph, None, local, torch.tensor([20, 20]), weights=[w, 0.0],
-                                generator=torch.Generator().manual_seed(0), **kwargs) for w in (0.0, 5.0)}  # fmt: skip
-        assert out[0.0].shape == (2, 20, module.hparams.vaes["motion"]["feature_dim"])
-        assert not torch.allclose(out[0.0], out[5.0])
-        with pytest.raises(LocalActionError, match="one per action"):
-            guided_sample(module, graph, None, local, torch.tensor([20]), weights=[1.0], **kwargs)
-        with pytest.raises(LocalActionError, match=">= 0"):
-            guided_sample(module, graph, None, local, torch.tensor([20]), weights=[1.0, -1.0], **kwargs)
-    finally:
-        la.graph_batch = original
+    monkeypatch.setattr(guided, "_node_features", lambda graphs, encoder: [feats] * len(graphs))
+    pipe = guided.GuidedMotionPipeline(module)
+    pipe._encoder = "the graph table's features"
+    kwargs = dict(steps={"motion": 3, "action": 3, "specific": 3}, rho=0.05)
+    out = {w: pipe.sample_features(lengths=torch.tensor([20, 20]), **pipe.caption_copies(graph, local, 2, [w, 0.0]),
+                                   generator=torch.Generator().manual_seed(0), **kwargs) for w in (0.0, 5.0)}  # fmt: skip
+    assert len(out[0.0]) == 2 and out[0.0][0].shape == (20, module.hparams.vaes["motion"]["feature_dim"])
+    assert not np.allclose(out[0.0][0], out[5.0][0])
+    with pytest.raises(LocalActionError, match="one per action"):
+        pipe.caption_copies(graph, local, 1, [1.0])
+    with pytest.raises(LocalActionError, match=">= 0"):
+        pipe.caption_copies(graph, local, 1, [1.0, -1.0])
     with pytest.raises(LocalActionError, match="2 action node"):
         local_actions_for(module, CAPTIONS[0], texts=["walks forward"], motions=motions[:1])
