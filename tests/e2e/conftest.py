@@ -21,7 +21,7 @@ def _shared_text_cache(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def text_ckpt(tmp_path_factory) -> Path:
-    return train_tiny(tmp_path_factory.mktemp("text_model"))
+    return train_tiny(tmp_path_factory.mktemp("text_model"), process=True)  # train.py as a process, once per worker
 
 
 @pytest.fixture(scope="session")

@@ -168,7 +168,7 @@ def test_npy_with_the_wrong_joint_count(text_ckpt, tmp_path):
 
 
 def test_cli_prints_one_line_and_exits_2(text_ckpt, tmp_path):
-    proc = run_cli("edit.py", f"checkpoint={text_ckpt}", f"input={CLIP_ID}", "kind=parts", "parts=tail",
+    proc = run_cli("edit.py", f"checkpoint={text_ckpt}", f"input={CLIP_ID}", "kind=parts", "parts=tail", process=True,
                    env_dir=tmp_path, check=False)  # fmt: skip
     assert proc.returncode == 2 and proc.stderr.strip().startswith("error: unknown body part 'tail'")
     assert "Traceback" not in proc.stderr

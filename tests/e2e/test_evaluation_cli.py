@@ -44,7 +44,7 @@ def test_best_fid_checkpoint_is_the_lowest_logged_fid(tmp_path):
 def test_evaluate_writes_paper_table_and_sweep_plot(text_ckpt, tmp_path):
     common = [f"checkpoint={text_ckpt}", "replications=2", "mm_replications=1", "mm_repeats=10", "mm_conditions=4",
               "steps=3", "wandb=false"]  # fmt: skip
-    proc = run_cli("evaluate.py", *common, env_dir=tmp_path)
+    proc = run_cli("evaluate.py", *common, env_dir=tmp_path, process=True)
     run = next((tmp_path / "outputs").glob("evaluate/*"))
     table = (run / "table.md").read_text()
     assert "| Real |" in table and "R-Precision top-3" in table and "MultiModality" in table

@@ -34,7 +34,7 @@ def test_train_writes_checkpoint_and_logs(text_ckpt):
 def test_sample_text_writes_joints_features_and_video(text_ckpt, tmp_path):
     run_cli(
         "sample.py", f"checkpoint={text_ckpt}", "text=a person walks forward", "num_samples=2", "length=1.5",
-        "export=gif", "sampler.steps=4", env_dir=tmp_path,
+        "export=gif", "sampler.steps=4", env_dir=tmp_path, process=True,
     )  # fmt: skip
     out = next((tmp_path / "outputs" / "sample").iterdir())
     results = json.loads((out / "results.json").read_text())["samples"]
@@ -52,7 +52,7 @@ def test_sample_is_deterministic_for_a_seed(text_ckpt, tmp_path):
         d = tmp_path / str(k)
         d.mkdir()
         run_cli("sample.py", f"checkpoint={text_ckpt}", "text=a person bows", "num_samples=1", "length=1",
-                "export=none", "sampler.steps=3", "seed=7", "precision=32", env_dir=d)  # fmt: skip
+                "export=none", "sampler.steps=3", "seed=7", "precision=32", env_dir=d, process=k == 1)  # fmt: skip
         outs.append(np.load(next((d / "outputs" / "sample").glob("*/a_person_bows_00_joints.npy"))))
     np.testing.assert_array_equal(outs[0], outs[1])
 

@@ -1,6 +1,7 @@
-"""The error boundary through the installed commands: bad settings, unreadable input, unusable run folders. Each case
-is one subprocess; they run two at a time (a module fixture starts every collected case, the tests read the
-results). Every case: exit code 2, one ``error:`` line naming the problem, no traceback, and no result files."""
+"""The error boundary through the installed commands: bad settings, unreadable input, unusable run folders. One case
+of each kind runs as a subprocess, the rest through the same console-script function in the test process
+(hostile_cli.run_collected; a module fixture runs every collected case, the tests read the results). Every case:
+exit code 2, one ``error:`` line naming the problem, no traceback, and no result files."""
 
 from __future__ import annotations
 
@@ -28,18 +29,18 @@ def _a_file_as_output(tmp: Path) -> tuple[str, ...]:
     return (f"paths.output_dir={tmp / 'taken'}",)
 
 
-def sample(name, *args, needles, setup=None, model=True):
-    return Hostile(name, "sample", ((MODEL,) if model else ()) + SMALL + args, needles, setup)
+def sample(name, *args, needles, setup=None, model=True, process=False):
+    return Hostile(name, "sample", ((MODEL,) if model else ()) + SMALL + args, needles, setup, process=process)
 
 
 CASES = [
     # settings that do not exist or do not parse
-    sample("misspelt_key", "lenght=3", needles=("unknown setting 'lenght'",)),
+    sample("misspelt_key", "lenght=3", needles=("unknown setting 'lenght'",), process=True),
     sample("unknown_sampler", "text=walk", "sampler=euler", needles=("sampler/euler", "auto, ddim, ddpm, dpmpp")),
     sample("override_syntax", "text=walk", "guidance=[1", needles=("[1",)),
     # numbers: type, finiteness, range, before the model loads
     sample("length_text", "text=walk", "length=abc", needles=("length='abc'", "a number > 0")),
-    sample("length_nan", "text=walk", "length=nan", needles=("length=nan", "a number > 0")),
+    sample("length_nan", "text=walk", "length=nan", needles=("length=nan", "a number > 0"), process=True),
     sample("length_inf", "text=walk", "length=inf", needles=("length=inf",)),
     sample("length_negative", "text=walk", "length=-1", needles=("length=-1",)),
     sample("frames_zero", "text=walk", "frames=0", needles=("frames=0", "an integer >= 1")),
@@ -60,6 +61,7 @@ CASES = [
         "checkpoint=/nonexistent/model.safetensors",
         needles=("nonexistent",),
         model=False,
+        process=True,
     ),  # fmt: skip
     sample("checkpoint_is_a_folder", "text=walk", "checkpoint=.", needles=("checkpoint",), model=False),
     sample("prompts_file_missing", "prompts_file=nowhere.txt", needles=("nowhere.txt", "not found")),
@@ -76,7 +78,9 @@ CASES = [
     sample("mesh_without_body", "text=walk", "export=mp4", "render=mesh", needles=("smpl_model",)),
     Hostile("unknown_action", "sample", (MODEL, *SMALL, "action=fly"), ("unknown action 'fly'",)),
     # run folders that cannot be made
-    sample("output_dir_is_a_file", "text=walk", needles=("is a file, not a folder",), setup=_a_file_as_output),
+    sample(
+        "output_dir_is_a_file", "text=walk", needles=("is a file, not a folder",), setup=_a_file_as_output, process=True
+    ),
     sample("run_dir_under_proc", "text=walk", "hydra.run.dir=/proc/motiondiff-run", needles=("cannot make the run",)),
     # edit.py
     Hostile("edit_start_nan", "edit", (MODEL, CLIP, "start=nan", "num_samples=1", "export=none"), ("start=nan",)),
@@ -98,6 +102,7 @@ CASES = [
         (MODEL, "input=garbage.bvh", "num_samples=1", "export=none"),
         ("garbage.bvh",),
         _file("garbage.bvh", b"\x00\x01 not a bvh at all \xff"),
+        process=True,
     ),  # fmt: skip
     Hostile(
         "edit_unknown_parts",
@@ -106,8 +111,8 @@ CASES = [
         ("tail",),
     ),  # fmt: skip
     # evaluate.py and train.py
-    Hostile("evaluate_zero_replications", "evaluate", (MODEL, "replications=0"), ("replications=0",)),
-    Hostile("train_batch_zero", "train", ("batch_size=0",), ("batch_size=0",)),
+    Hostile("evaluate_zero_replications", "evaluate", (MODEL, "replications=0"), ("replications=0",), process=True),
+    Hostile("train_batch_zero", "train", ("batch_size=0",), ("batch_size=0",), process=True),
     Hostile("train_heads_do_not_divide", "train", ("model.num_heads=3",), ("model.num_heads=3", "divide")),
     Hostile("train_missing_dataset", "train", ("dataset=bvh", "dataset.root=/nonexistent/bvh"), ("nonexistent",)),
 ]

@@ -1,7 +1,8 @@
 """Bounds on what small inputs may ask for, through the installed commands: BVH files whose frame time, frame count or
 joint names ask for too much or lie, zip bombs and members named outside the archive, link loops, num_samples far
-beyond the bound. Every refused case: exit code 2, one ``error:`` line, no traceback, no files left. The largest
-small inputs run under a peak-memory measure (the child's peak RSS, `ru_maxrss` of a fresh wrapper process: RLIMIT_AS
+beyond the bound (one case of each kind as a subprocess, the others in this process: see hostile_cli). Every refused
+case: exit code 2, one ``error:`` line, no traceback, no files left. The largest small inputs run under a
+peak-memory measure (the child's peak RSS, `ru_maxrss` of a fresh wrapper process: RLIMIT_AS
 cannot limit torch, whose virtual reservations are far above what it uses) and must stay within 4 GiB."""
 
 from __future__ import annotations
@@ -32,8 +33,8 @@ def _bvh(text_fn, name: str = "clip.bvh"):
     return setup
 
 
-def edit_bvh(name: str, text_fn, *needles: str, args: tuple[str, ...] = ()) -> Hostile:
-    return Hostile(name, "edit", (*EDIT, *args), ("clip.bvh", *needles), _bvh(text_fn))
+def edit_bvh(name: str, text_fn, *needles: str, args: tuple[str, ...] = (), process=False) -> Hostile:
+    return Hostile(name, "edit", (*EDIT, *args), ("clip.bvh", *needles), _bvh(text_fn), process=process)
 
 
 def _frame_time(value: str):
@@ -44,11 +45,11 @@ def _frames(count: int, **kwargs):
     return lambda: set_line(bvh_text(4, **kwargs), "Frames", f"Frames: {count}")
 
 
-def prepare(name: str, setup, *needles: str, args: tuple[str, ...] = ()) -> Hostile:
+def prepare(name: str, setup, *needles: str, args: tuple[str, ...] = (), process=False) -> Hostile:
     def made(tmp: Path) -> tuple[str, ...]:
         return ("bvh", "--src", str(setup(tmp)), "--out", str(tmp / "out"), "--workers", "1", *args)
 
-    return Hostile(name, "prepare", (), needles, made)
+    return Hostile(name, "prepare", (), needles, made, process=process)
 
 
 def _folder(*names_and_texts) -> callable:
@@ -95,10 +96,16 @@ def _timed_prompts(tmp: Path) -> tuple[str, ...]:
 
 CASES = [
     # BVH files that ask for too much or lie: refused with one line, before the model loads
-    edit_bvh("edit_frames_beyond_bound", _frames(600000), "'Frames: 600000'", "split the capture"),
+    edit_bvh("edit_frames_beyond_bound", _frames(600000), "'Frames: 600000'", "split the capture", process=True),
     edit_bvh("edit_duplicate_joint_names", _duplicate_joint, "'Toes_L' appears twice", "rename one"),
     edit_bvh("edit_resampled_beyond_bound", lambda: bvh_text(20001, frame_time=10.0), "more than 200000"),
-    prepare("prepare_frame_time_huge", _folder(("clip.bvh", _frame_time("1e6"))), "clip.bvh", "outside 0.0001..10"),
+    prepare(
+        "prepare_frame_time_huge",
+        _folder(("clip.bvh", _frame_time("1e6"))),
+        "clip.bvh",
+        "outside 0.0001..10",
+        process=True,
+    ),
     prepare("prepare_frame_time_tiny", _folder(("clip.bvh", _frame_time("0.00001"))), "'Frame Time: 1e-05'"),
     prepare(
         "prepare_values_beyond_bound",
@@ -121,6 +128,7 @@ CASES = [
         "sample",
         ("checkpoint=shipped", "text=walk", "num_samples=100000"),
         ("num_samples=100000", "from 1 to 1000"),
+        process=True,
     ),  # fmt: skip
     Hostile(
         "sample_long_num_samples", "sample", ("checkpoint=shipped", "num_samples=65"), ("from 1 to 64",), _timed_prompts
@@ -130,6 +138,7 @@ CASES = [
         "prepare_zip_traversal",
         lambda tmp: zip_of(tmp / "t.zip", {"../../evil.bvh": bvh_text(4)}),
         "'../../evil.bvh' points outside the archive",
+        process=True,
     ),  # fmt: skip
     prepare(
         "prepare_zip_duplicate_joints",

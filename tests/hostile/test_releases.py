@@ -1,8 +1,9 @@
 """Broken, tampered and foreign model files and non-finite numbers through the installed commands: releases with a
 flipped bit, a NaN weight, a truncated or mis-shaped weights file, a JSON that breaks the schema or names a path as
 its text encoder; garbage, crafted and NaN checkpoints; resumes of another batch size or architecture; NaN settings;
-models whose output is NaN. Each case is one subprocess (two at a time, as tests/hostile/test_boundary.py): exit
-code 2, one ``error:`` line naming the problem, no traceback, never torch's weights_only=False advice, no files."""
+models whose output is NaN. One case of each kind is a subprocess, the rest run in this process (as
+tests/hostile/test_boundary.py): exit code 2, one ``error:`` line naming the problem, no traceback, never torch's
+weights_only=False advice, no files."""
 
 from __future__ import annotations
 
@@ -127,12 +128,13 @@ def _resume(batch_size: int) -> Callable[[Path], tuple[str, ...]]:
     return setup
 
 
-def sample(name: str, setup: Setup | None, *needles: str, args: tuple[str, ...] = ()) -> Hostile:
-    return Hostile(name, "sample", SMALL + args, needles, setup)
+def sample(name: str, setup: Setup | None, *needles: str, args: tuple[str, ...] = (), process=False) -> Hostile:
+    return Hostile(name, "sample", SMALL + args, needles, setup, process=process)
 
 
-def edit(name: str, setup: Setup | None, *needles: str, args: tuple[str, ...] = ()) -> Hostile:
-    return Hostile(name, "edit", (CLIP, "num_samples=1", "export=none", "steps=2") + args, needles, setup)
+def edit(name: str, setup: Setup | None, *needles: str, args: tuple[str, ...] = (), process=False) -> Hostile:
+    return Hostile(name, "edit", (CLIP, "num_samples=1", "export=none", "steps=2") + args, needles, setup,
+                   process=process)  # fmt: skip
 
 
 def _without(*keys: str):
@@ -149,7 +151,14 @@ def _without(*keys: str):
 
 CASES = [
     # the checksum: one flipped bit
-    sample("flipped_bit", release(raw=_flip_bit, checksum=False), "weights_sha256", "model.safetensors", "restore"),
+    sample(
+        "flipped_bit",
+        release(raw=_flip_bit, checksum=False),
+        "weights_sha256",
+        "model.safetensors",
+        "restore",
+        process=True,
+    ),
     # weights that match their checksum but are broken
     sample("nan_weight", release(weights=_set("denoiser.output_proj.weight", float("nan"))), "nan or infinite weights"),
     sample(
@@ -174,6 +183,7 @@ CASES = [
         release(raw=_json_text(b'{"format": "motiondiff-release-1", "hpar'), checksum=False),
         "model.json",
         "not valid json",
+        process=True,
     ),  # fmt: skip
     sample("json_nan_token", release(raw=_json_text(b'{"format": NaN}'), checksum=False), "not valid json"),
     sample(
@@ -200,6 +210,7 @@ CASES = [
         "crafted.ckpt",
         "it would import print",
         "nothing was run",
+        process=True,
     ),  # fmt: skip
     sample("ckpt_truncated", _checkpoint("cut.ckpt", _nan_state, cut=20000), "cut.ckpt", "truncated or corrupt"),
     sample("ckpt_nan_weights", _checkpoint("nan.ckpt", _nan_state), "nan.ckpt", "nan or infinite weights"),
@@ -209,13 +220,21 @@ CASES = [
         ("method=guidedmotion", "text=walk", "export=none"),
         ("latent checkpoint", "garbage.ckpt", "cannot be loaded"),
         _garbage,
+        process=True,
     ),  # fmt: skip
     # non-finite settings, before any model loads
-    sample("guidance_inf", None, "guidance=inf", args=("checkpoint=shipped", "guidance=inf")),
+    sample("guidance_inf", None, "guidance=inf", args=("checkpoint=shipped", "guidance=inf"), process=True),
     sample("eta_nan", None, "sampler.eta=nan", "finite", args=("checkpoint=shipped", "sampler.eta=nan")),
     edit("edit_guidance_nan", None, "guidance=nan", args=("checkpoint=shipped", "guidance=nan")),
     # finite weights whose motion is not: refused before anything is written
-    sample("nan_motion", release(weights=_huge), "the generated motion", "nothing was written", args=("steps=2",)),
+    sample(
+        "nan_motion",
+        release(weights=_huge),
+        "the generated motion",
+        "nothing was written",
+        args=("steps=2",),
+        process=True,
+    ),
     Hostile(
         "nan_long_motion",
         "sample",
@@ -233,7 +252,14 @@ CASES = [
         release(weights=_huge),
     ),  # fmt: skip
     # resuming a run from a checkpoint of another batch size or architecture
-    Hostile("resume_other_batch_size", "train", ("logger=none",), ("batch_size=7", "same batch_size"), _resume(7)),
+    Hostile(
+        "resume_other_batch_size",
+        "train",
+        ("logger=none",),
+        ("batch_size=7", "same batch_size"),
+        _resume(7),
+        process=True,
+    ),
     Hostile(
         "resume_other_architecture",
         "train",
