@@ -89,7 +89,7 @@ def test_unconstrained_jp_model_with_smoothing_reports_its_own_feature_smoothnes
     from fixtures.tiny_models import tiny_datamodule, tiny_module
     from hydra import compose, initialize_config_dir
 
-    from motiondiff.cli.evaluate import report_evaluation
+    from motiondiff.cli.evaluation import report_evaluation
     from motiondiff.runtime.paths import CONF_DIR
 
     dm = tiny_datamodule(representation="jp")

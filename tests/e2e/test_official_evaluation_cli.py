@@ -63,7 +63,7 @@ def test_action_datasets_with_the_official_classifiers(shared, tmp_path, dataset
 def test_official_without_a_folder_names_the_layout(text_ckpt):
     from omegaconf import OmegaConf
 
-    from motiondiff.cli.evaluate import load_evaluators
+    from motiondiff.cli.evaluation import load_evaluators
     from motiondiff.model_files.loading import load_model
     from motiondiff.runtime.errors import UsageError
 

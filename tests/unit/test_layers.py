@@ -185,8 +185,9 @@ def test_the_checks_fail_on_a_planted_violation(extra, expect):
         assert any("motiondiff.data.representations.clip" in c for c in _cycles(edges))
 
 
-# the generation commands are thin shells (issue 40): what they share lives in non-command modules (cli.common,
-# cli.outputs, cli.validate, cli.prompt_inputs) or below, never in another command or a study
+# the commands are shells (issue 40): what they share lives in non-command modules (cli.common, cli.outputs,
+# cli.validate, cli.prompt_inputs, cli.evaluation) or below, never in another command or a study; cli.entry
+# dispatches to the commands and is not one
 SHELLS = ("motiondiff.cli.sample", "motiondiff.cli.edit", "motiondiff.cli.sample_guided")
 COMMANDS = (*SHELLS, "motiondiff.cli.evaluate", "motiondiff.cli.train", "motiondiff.cli.train_vae",
             "motiondiff.cli.train_latent", "motiondiff.cli.train_evaluator", "motiondiff.cli.preset_audit",
@@ -194,11 +195,11 @@ COMMANDS = (*SHELLS, "motiondiff.cli.evaluate", "motiondiff.cli.train", "motiond
 
 
 def _shell_violations(edges) -> list[str]:
-    return sorted(f"{src} imports {dst}" for src in SHELLS for dst in edges.get(src, ())
+    return sorted(f"{src} imports {dst}" for src in COMMANDS for dst in edges.get(src, ())
                   if (dst in COMMANDS and dst != src) or dst.startswith("motiondiff.studies"))  # fmt: skip
 
 
-def test_the_generation_commands_import_no_other_command_and_no_study():
+def test_no_command_imports_another_command_or_a_study():
     bad = _shell_violations(graph())
     assert not bad, "commands that borrow from another command or a study:\n" + "\n".join(bad)
 
@@ -214,7 +215,8 @@ def test_the_generation_commands_are_short():
 
 
 @pytest.mark.parametrize("extra", [{"motiondiff.cli.edit": {"motiondiff.cli.sample"}},
-                                   {"motiondiff.cli.sample": {"motiondiff.studies.behaviour"}}])  # fmt: skip
+                                   {"motiondiff.cli.sample": {"motiondiff.studies.behaviour"}},
+                                   {"motiondiff.cli.train": {"motiondiff.cli.evaluate"}}])  # fmt: skip
 def test_the_shell_check_fails_on_a_planted_borrowing(extra):
     edges = {k: set(v) for k, v in graph().items()}
     for k, v in extra.items():

@@ -37,21 +37,13 @@ def build_text_table(cfg: DictConfig, dm: MotionDataModule):
     return cache.table(texts)
 
 
-def data_hparams(dm: MotionDataModule, name: str) -> dict:
-    """What a module must carry from its training data to generate without it: feature width and Mean/Std, length
-    limit, frame rate, joints, dataset name and representation."""
-    ds = dm.dataset("train")
-    return dict(feature_dim=dm.feature_dim, mean=ds.mean.tolist(), std=ds.std.tolist(), max_frames=dm.max_frames,
-                fps=dm.fps, num_joints=dm.num_joints, dataset=name, representation=dm.representation_spec())  # fmt: skip
-
-
 def build_module(cfg: DictConfig, dm: MotionDataModule) -> MotionDiffusionModule:
     kind = cfg.condition.kind
     action_names = list(getattr(dm, "action_names", None) or []) if kind == "action" else None
     if kind == "action" and not action_names:
         raise UsageError(f"dataset {cfg.dataset.name} has no action labels: use condition=text or condition=none")
     return MotionDiffusionModule(
-        **data_hparams(dm, cfg.dataset.name),
+        **dm.model_hparams(cfg.dataset.name),
         model=to_dict(cfg.model),
         backbone=to_dict(cfg.backbone),
         condition=to_dict(cfg.condition),
@@ -217,7 +209,7 @@ def run(cfg: DictConfig) -> Path:
 def final_evaluation(cfg: DictConfig, module: MotionDiffusionModule, dm: MotionDataModule, out: Path, steps: int):
     """evaluate.py's protocol on the trained weights (the EMA ones when ema=true), written into the run folder:
     what a multirun's summary table reads (`motiondiff.eval.ablation`)."""
-    from motiondiff.cli.evaluate import report_evaluation  # lazy: torchmetrics (+2.6 s to import)
+    from motiondiff.cli.evaluation import report_evaluation  # lazy: torchmetrics (+2.6 s to import)
 
     base = OmegaConf.load(REPO_DIR / "conf" / "evaluate.yaml")
     for key in ("defaults", "hydra", "checkpoint"):

@@ -17,7 +17,6 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
 from motiondiff.cli.common import UsageError, to_dict, trainer_parts
-from motiondiff.cli.train import data_hparams
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
@@ -44,7 +43,7 @@ def resolve_tokens(level: str | None, tokens: int | None) -> int:
 
 def build_module(cfg: DictConfig, dm: MotionDataModule, tokens: int) -> MotionVAEModule:
     return MotionVAEModule(
-        **data_hparams(dm, cfg.dataset.name),
+        **dm.model_hparams(cfg.dataset.name),
         vae={**to_dict(cfg.vae), "tokens": tokens},
         optim=to_dict(cfg.optim),
         kl_weight=float(cfg.kl_weight),

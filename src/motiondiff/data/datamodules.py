@@ -102,6 +102,14 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         """Turns this datamodule's features into the HumanML3D features the evaluators read."""
         return bridge_from_spec(None, self.feature_dim)
 
+    def model_hparams(self, name: str) -> dict:
+        """What a model must carry from its training data to generate without it: feature width and Mean/Std, length
+        limit, frame rate, joints, dataset name and representation."""
+        ds = self.dataset("train")
+        return dict(feature_dim=self.feature_dim, mean=ds.mean.tolist(), std=ds.std.tolist(),
+                    max_frames=self.max_frames, fps=self.fps, num_joints=self.num_joints, dataset=name,
+                    representation=self.representation_spec())  # fmt: skip
+
     def _stats(self) -> tuple[np.ndarray, np.ndarray]:
         if self._mean is None or self._std is None:
             raise RuntimeError(f"{type(self).__name__}: call setup() before reading mean/std")

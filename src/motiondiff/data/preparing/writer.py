@@ -57,8 +57,11 @@ _JOINT_MAP: JointMap | None = None
 
 
 def _init_worker(joint_map: JointMap) -> None:
+    """Each process opens its own sources: a forked worker must not read through a zip handle inherited from its
+    parent (the file offset is shared, and two readers corrupt each other's inflating: "invalid distance")."""
     global _JOINT_MAP
     _JOINT_MAP = joint_map
+    _SOURCES.clear()
 
 
 def _process(job: Job) -> ProcessedClip | str:
@@ -191,7 +194,10 @@ def _run(jobs: list[Job], joint_map: JointMap, workers: int | None, progress: bo
     bar = dict(total=len(jobs), desc="prepare", unit="clip", disable=not progress)
     if workers <= 1:
         _init_worker(joint_map)
-        return [_process(j) for j in tqdm(jobs, **bar)]
+        try:
+            return [_process(j) for j in tqdm(jobs, **bar)]
+        finally:
+            _SOURCES.clear()  # no zip stays open in this process (a later pool would fork it)
     with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(joint_map,)) as pool:
         return list(tqdm(pool.map(_process, jobs, chunksize=8), **bar))
 
