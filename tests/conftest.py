@@ -35,3 +35,35 @@ def _keep_caches_out_of_home(tmp_path_factory):
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
     os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")
     yield
+
+
+# The longest test files first (seconds on 2 cores, from `pytest --durations`): `make test` deals files to its two
+# workers in collection order (`--dist loadfile`), so the long ones start at once and the short ones fill in after,
+# and the workers finish together instead of one waiting on a long file dealt last.
+LONGEST_FIRST = [
+    "e2e/test_guidedmotion_cli.py",  # 128
+    "e2e/test_notebooks.py",  # 127
+    "e2e/test_ddp_cli.py",  # 96
+    "e2e/test_train_sample_cli.py",  # 90
+    "integration/test_variant_matrix.py",  # 78
+    "hostile/test_kill_training.py",  # 74
+    "hostile/test_kill_sampling.py",  # 67
+    "e2e/test_evaluation_cli.py",  # 65
+    "hostile/test_boundary.py",  # 61
+    "hostile/test_releases.py",  # 60
+    "hostile/test_kill_prepare.py",  # 50
+    "e2e/test_dashboard.py",  # 50
+    "hostile/test_interrupts.py",  # 48
+    "e2e/test_edit_cli.py",  # 48
+    "hostile/test_bounds.py",  # 47
+]
+
+
+def pytest_collection_modifyitems(items):
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+
+    def key(item) -> int:
+        path = Path(str(item.fspath)).relative_to(REPO / "tests").as_posix()
+        return rank.get(path, len(rank))
+
+    items.sort(key=key)  # stable: the rest keep their order

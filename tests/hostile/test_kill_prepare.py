@@ -1,4 +1,5 @@
-"""SIGKILL at ten random points of `prepare --force` over an existing dataset: the old dataset or the new one."""
+"""SIGKILL at five random points (while it writes) of `prepare --force` over an existing dataset: the old dataset or
+the new one."""
 
 from __future__ import annotations
 
@@ -28,10 +29,10 @@ def dataset_fingerprint(out: Path) -> str:
 @pytest.mark.skipif(not BANDAI.is_file(), reason=f"needs the Bandai Namco data at {BANDAI}")
 def test_prepare_force_killed_anywhere_leaves_the_old_dataset_or_the_new_one(tmp_path):
     out = tmp_path / "data" / "ds"
-    duration = timed(tmp_path, "prepare", *PREPARE, "--seed", "0", "--out", str(out))
+    times = timed(tmp_path, "prepare", *PREPARE, "--seed", "0", "--out", str(out))
     old = dataset_fingerprint(out)
     seen = []
-    for at in kill_points(duration, seed=1):
+    for at in kill_points(times, seed=1):
         killed(tmp_path, "prepare", *PREPARE, "--seed", "1", "--force", "--out", str(out), after=at)
         seen.append(dataset_fingerprint(out))  # raises if a file is missing or unreadable
     timed(tmp_path, "prepare", *PREPARE, "--seed", "1", "--force", "--out", str(out))

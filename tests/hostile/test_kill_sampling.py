@@ -1,5 +1,5 @@
-"""SIGKILL at ten random points of sampling several prompts: every run folder is complete, or marked as a run in
-progress and removed by the next start."""
+"""SIGKILL at five random points (while it writes) of sampling several prompts: every run folder is complete, or
+marked as a run in progress and removed by the next start."""
 
 from __future__ import annotations
 
@@ -39,9 +39,9 @@ def check_sample_folders(root: Path) -> tuple[int, int]:
 
 def test_sampling_several_prompts_killed_anywhere_leaves_no_mixed_folder(tmp_path):
     (tmp_path / "prompts.txt").write_text(PROMPTS)
-    duration = timed(tmp_path, "sample", *SAMPLE)
+    times = timed(tmp_path, "sample", *SAMPLE)
     root = tmp_path / "outputs" / "sample"
-    for at in kill_points(duration, seed=2):
+    for at in kill_points(times, seed=2):
         killed(tmp_path, "sample", *SAMPLE, after=at)
         check_sample_folders(root)
     timed(tmp_path, "sample", *SAMPLE)

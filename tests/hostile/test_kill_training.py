@@ -1,5 +1,5 @@
-"""SIGKILL at ten random points of training (each run resuming the last): every checkpoint loads, half-written ones
-are removed by the next start, and training resumes."""
+"""SIGKILL at five random points (while it writes) of training (each run resuming the last): every checkpoint loads,
+half-written ones are removed by the next start, and training resumes."""
 
 from __future__ import annotations
 
@@ -19,9 +19,9 @@ def newest_last(root: Path) -> Path | None:
 
 
 def test_training_killed_anywhere_leaves_loadable_checkpoints_and_resumes(tmp_path):
-    duration = timed(tmp_path, "train", *TRAIN, "trainer.max_steps=12")
+    times = timed(tmp_path, "train", *TRAIN, "trainer.max_steps=12")
     root = tmp_path / "outputs" / "train"
-    for at in kill_points(duration, seed=3):
+    for at in kill_points(times, seed=3):
         last = newest_last(root)  # each run resumes the last one's progress, as a user would after a crash
         resume = (f"ckpt_path={last}",) if last is not None else ()
         killed(tmp_path, "train", *TRAIN, "trainer.max_steps=100000", *resume, after=at)
