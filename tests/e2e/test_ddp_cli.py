@@ -33,7 +33,7 @@ def metrics(workdir: Path) -> dict[str, dict[int, float]]:
 def test_two_process_ddp_follows_the_single_process_curve_at_the_same_global_batch(tmp_path):
     single, ddp = tmp_path / "single", tmp_path / "ddp"
     single.mkdir(), ddp.mkdir()
-    run_cli("train.py", *COMMON, "batch_size=16", env_dir=single, timeout=600, process=True)
+    run_cli("train.py", *COMMON, "batch_size=16", env_dir=single, timeout=600)
     run_cli("train.py", *COMMON, "trainer=ddp", "batch_size=8", env_dir=ddp, timeout=600, process=True)
     (run_dir,) = (ddp / "outputs" / "train").glob("*")
     assert (run_dir / "train_ddp_process_1.log").is_file(), "the second process did not run"

@@ -7,7 +7,7 @@ import signal
 import subprocess
 import time
 
-from hostile_cli import assert_refused, files_under, popen_cli, run_cli
+from hostile_cli import assert_refused, files_under, popen_cli, run_in_process
 
 PROMPTS = "".join(f"a person walks forward then turns {k} times\n" for k in range(20))
 
@@ -60,8 +60,8 @@ def test_a_second_run_into_a_folder_in_use_is_refused_and_changes_nothing(tmp_pa
     try:
         assert wait_for(lambda: (run_dir / "csv").exists()), "the first training did not start"
         before = files_under(run_dir)
-        second = run_cli(tmp_path, "sample", "checkpoint=shipped", "text=walk", "length=1", "export=none",
-                         f"hydra.run.dir={run_dir}")  # fmt: skip
+        second = run_in_process(tmp_path, "sample", "checkpoint=shipped", "text=walk", "length=1", "export=none",
+                                f"hydra.run.dir={run_dir}")  # fmt: skip
         assert_refused(second, "another run", str(run_dir))
         assert not any(name.startswith("sample") or name.endswith(".npy") for name in files_under(run_dir))
         assert set(before) <= set(files_under(run_dir))

@@ -183,7 +183,6 @@ CASES = [
         release(raw=_json_text(b'{"format": "motiondiff-release-1", "hpar'), checksum=False),
         "model.json",
         "not valid json",
-        process=True,
     ),  # fmt: skip
     sample("json_nan_token", release(raw=_json_text(b'{"format": NaN}'), checksum=False), "not valid json"),
     sample(

@@ -6,14 +6,14 @@ from __future__ import annotations
 import json
 import os
 
-from hostile_cli import files_under, run_cli
+from hostile_cli import files_under, run_in_process
 
 SECRET = "motiondiff-hostile-secret-value"
 
 
 def test_an_interpolation_in_the_text_is_written_literally_and_results_record_what_ran(tmp_path):
     text = "${oc.env:MOTIONDIFF_TEST_SECRET}"
-    proc = run_cli(tmp_path, "sample", "checkpoint=shipped", f"text='{text}'", "num_samples=1", "length=1",
+    proc = run_in_process(tmp_path, "sample", "checkpoint=shipped", f"text='{text}'", "num_samples=1", "length=1",
                    "export=[bvh,html]", "sampler=ddim", "steps=3", env={"MOTIONDIFF_TEST_SECRET": SECRET})  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert "Traceback" not in proc.stderr
