@@ -19,8 +19,8 @@ from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.lit.vae import MotionVAEModule
+from motiondiff.model_files.loading import load_vae
 from motiondiff.models.hierarchical import LEVELS
-from motiondiff.runtime.checked_loading import reading
 from motiondiff.runtime.provenance import provenance, update_run_json
 from motiondiff.text.encoders import build_text_encoder
 from motiondiff.text.graph_features import graph_table
@@ -29,15 +29,9 @@ log = logging.getLogger(__name__)
 
 
 def load_vaes(paths: dict) -> dict[str, MotionVAEModule]:
-    vaes = {}
-    for level in LEVELS:
-        path = Path(str(paths[level]))
-        if not path.is_file():
-            raise UsageError(f"vae.{level}={path} not found; train it with `python train_vae.py level={level}` on the "
-                             "same dataset and pass its best-mpjpe checkpoint")  # fmt: skip
-        with reading(path, f"vae.{level} checkpoint", "pass the best-mpjpe checkpoint train_vae.py wrote"):
-            vaes[level] = MotionVAEModule.load_from_checkpoint(path, map_location="cpu", weights_only=True)
-    return vaes
+    """The three frozen VAEs (vae.motion / vae.action / vae.specific), each refused at once if it cannot be loaded."""
+    fix = "train it with `python train_vae.py level={}` on the same dataset and pass its best-mpjpe checkpoint"
+    return {level: load_vae(str(paths[level]), f"vae.{level} checkpoint", fix.format(level))[0] for level in LEVELS}
 
 
 def check_vaes(vaes: dict[str, MotionVAEModule], dm: MotionDataModule, name: str) -> None:

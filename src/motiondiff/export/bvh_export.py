@@ -27,10 +27,11 @@ import numpy as np
 
 from motiondiff.data.formats.bvh import motion_from_arrays, write_bvh
 from motiondiff.data.representations import RotationRepresentation  # torch: only when features are exported
+from motiondiff.export.pose_inputs import PoseInputs
 from motiondiff.export.rig_names import with_rig_names
 from motiondiff.geometry.inverse_kinematics import fit_rest_offsets, fit_rotations, solve_rotations
 from motiondiff.geometry.motion_checks import check_motion
-from motiondiff.geometry.rotations import matrix_to_quat, qfix, qnormalize
+from motiondiff.geometry.rotations import matrix_to_quat
 from motiondiff.geometry.skeleton import Skeleton
 
 if TYPE_CHECKING:
@@ -62,15 +63,14 @@ def export_bvh(
     skeleton: Skeleton,
     fps: float,
     *,
-    rotations: np.ndarray | None = None,
-    root: np.ndarray | None = None,
-    offsets: np.ndarray | None = None,
     scale: float = 1.0,
+    **pose: np.ndarray | None,
 ) -> ExportReport:
     """Write joints (N, J, 3) (metres, y up, the skeleton's joint order) as a BVH on `skeleton`.
 
-    With `rotations` (N, J, 4) local quaternions (w, x, y, z; the root's global) and `root` (N, 3) positions, as a
-    rotation representation gives them, those are written as they are, on `offsets` (default: the skeleton's).
+    ``pose``: `rotations`, `root`, `offsets` (`export.pose_inputs.PoseInputs`, which checks them). With `rotations`
+    (N, J, 4) local quaternions (w, x, y, z; the root's global) and `root` (N, 3) positions, as a rotation
+    representation gives them, those are written as they are, on `offsets` (default: the skeleton's).
     Otherwise the rotations are solved by inverse kinematics on `offsets`, by default the motion's own bone lengths
     and sibling arrangement (`fit_rest_offsets`), which makes the fit exact up to float precision for any motion of
     rigid bones; joints whose bones stretch (generated motion) then get rotations and bone lengths fitted to keep the
@@ -85,14 +85,8 @@ def export_bvh(
     )
     if not (np.isfinite(scale) and scale > 0):
         raise ValueError(f"export_bvh: scale must be a positive number (100 for a centimetre file), got {scale}")
-    if (rotations is None) != (root is None):
-        raise ValueError(
-            "export_bvh: pass both rotations and root (a rotation representation's output) or neither (rotations "
-            "are then solved from the joints)"
-        )
+    rotations, root, offsets = PoseInputs.checked("export_bvh", joints, skeleton, pose)
     if rotations is not None:
-        rotations, root = _check_rotations(rotations, root, joints.shape[:2])
-        offsets = _check_offsets(skeleton.offsets if offsets is None else offsets, skeleton)
         method = "rotations"
     else:
         half_life = TWIST_HALF_LIFE_S * fps
@@ -100,7 +94,6 @@ def export_bvh(
             rotations, root, offsets = fit_rotations(joints, skeleton, fit_rest_offsets(joints, skeleton),
                                                      twist_half_life=half_life)  # fmt: skip
         else:
-            offsets = _check_offsets(offsets, skeleton)
             rotations, root = solve_rotations(joints, skeleton, offsets, twist_half_life=half_life)
         method = "ik"
     names = [re.sub(r"\s+", "_", n) for n in skeleton.joint_names]
@@ -150,28 +143,3 @@ def export_bvh_from_features(
             path, joints, skeleton, fps, rotations=rotations, root=features[:, :3], offsets=rig_offsets, scale=scale
         )
     return export_bvh(path, joints, skeleton, fps, offsets=offsets, scale=scale)
-
-
-def _check_rotations(rotations, root, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    rotations, root = np.asarray(rotations, dtype=np.float64), np.asarray(root, dtype=np.float64)
-    n, j = shape
-    if rotations.shape != (n, j, 4) or root.shape != (n, 3):
-        raise ValueError(
-            f"export_bvh: rotations must be ({n}, {j}, 4) local quaternions (w, x, y, z) and root ({n}, 3) to match "
-            f"the joints, got {rotations.shape} and {root.shape}"
-        )
-    if not (np.isfinite(rotations).all() and np.isfinite(root).all()):
-        raise ValueError("export_bvh: rotations or root contain NaN or Inf; the motion diverged, resample it")
-    if (np.linalg.norm(rotations, axis=-1) < 1e-6).any():
-        raise ValueError("export_bvh: some rotation quaternions are zero; pass unit quaternions (w, x, y, z)")
-    return qfix(qnormalize(rotations)), root
-
-
-def _check_offsets(offsets, skeleton: Skeleton) -> np.ndarray:
-    offsets = np.asarray(offsets, dtype=np.float64)
-    if offsets.shape != (skeleton.num_joints, 3) or not np.isfinite(offsets).all():
-        raise ValueError(
-            f"export_bvh: offsets must be finite with shape ({skeleton.num_joints}, 3) (rest offset of each joint "
-            f"from its parent, metres), got {offsets.shape}"
-        )
-    return offsets

@@ -33,10 +33,11 @@ import numpy as np
 
 from motiondiff.data.representations import RotationRepresentation  # torch: only when features are exported
 from motiondiff.export.bvh_export import TWIST_HALF_LIFE_S, ExportReport
+from motiondiff.export.pose_inputs import PoseInputs
 from motiondiff.geometry.inverse_kinematics import fit_rest_offsets, fit_rotations
 from motiondiff.geometry.kinematics import forward_kinematics
 from motiondiff.geometry.motion_checks import check_motion
-from motiondiff.geometry.rotations import matrix_to_quat, qnormalize, quat_to_rotvec, rotvec_to_quat
+from motiondiff.geometry.rotations import matrix_to_quat, quat_to_rotvec, rotvec_to_quat
 from motiondiff.geometry.skeleton import SMPL22, SMPL24, Skeleton
 from motiondiff.runtime.atomic import atomic_write
 from motiondiff.runtime.errors import UsageError
@@ -83,37 +84,21 @@ def export_smpl(path: str | os.PathLike, joints: np.ndarray, skeleton: Skeleton,
 
 
 def smpl_parameters(
-    joints: np.ndarray,
-    skeleton: Skeleton,
-    fps: float,
-    *,
-    rotations: np.ndarray | None = None,
-    root: np.ndarray | None = None,
-    offsets: np.ndarray | None = None,
+    joints: np.ndarray, skeleton: Skeleton, fps: float, **pose: np.ndarray | None
 ) -> tuple[dict, np.ndarray, str]:
     """The SMPL parameters of joints (N, J, 3) (metres, y up) of a SMPL-22 or SMPL-24 skeleton, without writing
     them: (the file's arrays, |FK(arrays) - joints| (N, J) in metres, "rotations" or "ik").
 
-    With `rotations` (N, J, 4) (local quaternions w, x, y, z; the root's global) and `root` (N, 3), as a rotation
-    representation gives them, those are used on `offsets` (default: the skeleton's). Otherwise they are solved
-    by IK on SMPL's rest directions with the motion's own bone lengths and pelvis/chest arrangement, exact for rigid
-    bones; when the joints stretch their bones (generated motion) rotations and bone lengths are then fitted to
-    keep the worst joint as close as a fixed skeleton can (`refine_rotations`)."""
+    ``pose``: `rotations`, `root`, `offsets` (`export.pose_inputs.PoseInputs`, which checks them). With `rotations`
+    (N, J, 4) (local quaternions w, x, y, z; the root's global) and `root` (N, 3), as a rotation representation
+    gives them, those are used on `offsets` (default: the skeleton's). Otherwise they are solved by IK on SMPL's
+    rest directions with the motion's own bone lengths and pelvis/chest arrangement, exact for rigid bones; when the
+    joints stretch their bones (generated motion) rotations and bone lengths are then fitted to keep the worst
+    joint as close as a fixed skeleton can (`refine_rotations`)."""
     count = check_smpl_skeleton(skeleton)
     joints = check_motion(joints, skeleton, fps, "export_smpl")
-    if (rotations is None) != (root is None):
-        raise ValueError("export_smpl: pass both rotations and root (a rotation representation's output) or neither")
-    if offsets is not None:
-        offsets = np.asarray(offsets, dtype=np.float64)
-        if offsets.shape != (count, 3) or not np.isfinite(offsets).all():
-            raise ValueError(f"export_smpl: offsets must be finite with shape ({count}, 3), got {offsets.shape}")
+    rotations, root, offsets = PoseInputs.checked("export_smpl", joints, skeleton, pose)
     if rotations is not None:
-        rotations = qnormalize(np.asarray(rotations, dtype=np.float64))
-        root = np.asarray(root, dtype=np.float64)
-        if rotations.shape != joints.shape[:2] + (4,) or root.shape != (len(joints), 3):
-            raise ValueError(f"export_smpl: rotations must be {joints.shape[:2] + (4,)} and root ({len(joints)}, 3), "
-                             f"got {rotations.shape} and {root.shape}")  # fmt: skip
-        offsets = np.asarray(skeleton.offsets, dtype=np.float64) if offsets is None else offsets
         method = "rotations"
     else:
         rest = _smpl_rest(count)

@@ -21,12 +21,12 @@ def check_model_file(path: str | Path) -> None:
         checkpoint_state(path)
 
 
-def checkpoint_state(path: str | Path) -> dict:
-    """A motion model's training checkpoint read safely: its hyper_parameters and finite state_dict, or one
-    UsageError (what `lit.loading.load_model` builds the model from)."""
-    state = torch_load(path)
+def checkpoint_state(path: str | Path, what: str = "checkpoint", fix: str = CKPT_FIX) -> dict:
+    """A model's training checkpoint read safely: its hyper_parameters and finite state_dict, or one UsageError
+    naming `what` and `fix` (what `model_files.loading` builds the model from)."""
+    state = torch_load(path, what, fix)
     if not isinstance(state.get("hyper_parameters"), dict) or not isinstance(state.get("state_dict"), dict):
-        raise UsageError(f"checkpoint {path} has no hyper_parameters or state_dict: it is not a motion model's "
-                         f"training checkpoint; {CKPT_FIX}")  # fmt: skip
-    check_finite_state(state["state_dict"], f"checkpoint {path}")
+        raise UsageError(f"{what} {path} has no hyper_parameters or state_dict: it is not a model's training "
+                         f"checkpoint; {fix}")  # fmt: skip
+    check_finite_state(state["state_dict"], f"{what} {path}", fix)
     return state

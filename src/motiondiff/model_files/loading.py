@@ -29,6 +29,28 @@ def load_model(path: str | Path, device: str = "cpu") -> MotionDiffusion:
     return module.to(device).eval()
 
 
+VAE_FIX = "pass the best-mpjpe checkpoint train_vae.py wrote"
+
+
+def load_vae(path: str | Path, what: str = "VAE checkpoint", fix: str = VAE_FIX):
+    """A motion VAE of train_vae.py in eval mode on CPU, and its checkpoint's step: built from the checkpoint's
+    hyper-parameters (read without running pickled code). A missing file, or one that is not a VAE checkpoint or
+    holds NaN weights, is one UsageError naming `what` and `fix`."""
+    from motiondiff.lit.vae import MotionVAEModule  # Lightning: only where a VAE loads
+
+    path = Path(path)
+    if not path.is_file():
+        raise UsageError(f"{what} {path} not found; {fix}")
+    state = checkpoint_state(path, what, fix)
+    with reading(path, what, fix):
+        module = MotionVAEModule(**state["hyper_parameters"])
+        check_same_shapes(
+            state["state_dict"], module.state_dict(), f"{what} {path}", fix, "the VAE its hparams describe"
+        )
+        module.load_state_dict(state["state_dict"], strict=True)
+    return module.eval(), int(state.get("global_step", 0))
+
+
 LATENT_FIX = "give the .ckpt that train_latent.py wrote or a GuidedMotion release (.safetensors)"
 
 

@@ -25,8 +25,8 @@ import torch
 from motiondiff.eval import report
 from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_metrics
 from motiondiff.lit.vae import MotionVAEModule, mpjpe
+from motiondiff.model_files.loading import load_vae
 from motiondiff.models.vae import LEVEL_TOKENS
-from motiondiff.runtime.checked_loading import torch_load
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.paths import REPO_DIR, shown
 from motiondiff.runtime.scripting import quiet_tool_caches, register_resolvers
@@ -48,19 +48,15 @@ def newest_checkpoint(level: str, outputs: Path) -> Path:
     return found[-1]
 
 
-def load_vae(path: Path) -> tuple[MotionVAEModule, dict]:
+def load_level(path: Path) -> tuple[MotionVAEModule, dict]:
     """The module (eval mode) and what the report needs from the checkpoint and its run's run.json."""
-    if not path.is_file():
-        raise UsageError(f"checkpoint {path} not found; pass <level>=<path to a train_vae.py .ckpt>")
-    ckpt = torch_load(path, "VAE checkpoint", "pass the .ckpt train_vae.py wrote")  # no pickled code runs
-    module = MotionVAEModule(**ckpt["hyper_parameters"])
-    module.load_state_dict(ckpt["state_dict"])
+    module, step = load_vae(path, "checkpoint", "pass <level>=<path to a train_vae.py .ckpt>")
     run_json = path.parent.parent / "run.json"
     run = json.loads(run_json.read_text()) if run_json.is_file() else {}
-    info = {"checkpoint": shown(path), "tokens": module.tokens, "step": int(ckpt["global_step"]),
+    info = {"checkpoint": shown(path), "tokens": module.tokens, "step": step,
             "run_steps": run.get("train_steps"), "train_seconds": run.get("train_seconds"),
             "overrides": run.get("overrides"), "parameters": sum(p.numel() for p in module.vae.parameters())}  # fmt: skip
-    return module.eval(), info
+    return module, info
 
 
 def datamodule(module: MotionVAEModule, data_root: str | None):
@@ -203,7 +199,7 @@ def main(argv: list[str]) -> Path:
     cfg = study_config("vae_levels", argv)
     outputs = Path(os.environ.get("MOTIONDIFF_OUTPUT_DIR", REPO_DIR / "outputs"))
     paths = {lv: Path(cfg[lv]) if cfg[lv] is not None else newest_checkpoint(lv, outputs) for lv in LEVEL_TOKENS}
-    loaded = {lv: load_vae(p) for lv, p in paths.items()}
+    loaded = {lv: load_level(p) for lv, p in paths.items()}
     modules, infos = {lv: m for lv, (m, _) in loaded.items()}, {lv: i for lv, (_, i) in loaded.items()}
     first = modules["motion"].hparams
     for lv, m in modules.items():

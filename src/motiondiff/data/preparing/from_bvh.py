@@ -31,7 +31,7 @@ import hashlib
 import io
 import json
 import re
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path, PurePosixPath
 
 from motiondiff.data.formats.archive import Source, SourceError
@@ -40,7 +40,7 @@ from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.formats.up_axis import parse_up_axis
 from motiondiff.data.preparing.captions import GENERATED_NOTE
 from motiondiff.data.preparing.staging import staged_folder
-from motiondiff.data.preparing.writer import PrepareError, check_output, copy_license, process_and_write
+from motiondiff.data.preparing.writer import PrepareError, PrepareOptions, check_output, copy_license, process_and_write
 from motiondiff.runtime.atomic import atomic_write
 
 COLUMNS = ("file", "action", "style", "caption")
@@ -204,20 +204,17 @@ def prepare_bvh(
     labels: str | Path | None = None,
     joint_map: str = "auto",
     units_to_metres: float | None = None,
-    per_group: int | None = None,
-    max_frames: int | None = None,
-    compact: bool = False,
-    seed: int = 0,
-    workers: int | None = None,
-    force: bool = False,
-    progress: bool = True,
+    *,
     up_axis: str = "auto",
+    **options,
 ) -> dict:
     """Prepare BVH folders/zips into `out`; returns the report (also saved as report.json). `up_axis`: "auto" (each
     file's own, `motiondiff.data.formats.up_axis`; files it cannot decide are skipped with the reason) or a forced
-    "y", "z", ... for every file; Z-up files are turned to Y-up."""
+    "y", "z", ... for every file; Z-up files are turned to Y-up. `options`: those every source takes
+    (`writer.PrepareOptions`: per_group, max_frames, compact, seed, workers, force, progress)."""
+    opts = PrepareOptions.of("prepare_bvh", options)
     out = Path(out)
-    check_output(out, force)
+    check_output(out, opts.force)
     try:
         parse_up_axis(up_axis)
     except ValueError as err:
@@ -228,7 +225,8 @@ def prepare_bvh(
     files = list_files(srcs)
     clips = make_clips(files, {} if labels is None else read_labels(labels, files))
     jm = resolve_joint_map(joint_map, files, units_to_metres)
-    options = bvh_options(labels, joint_map, units_to_metres, per_group, max_frames, compact, seed, up_axis)
+    saved = bvh_options(labels, joint_map, units_to_metres, opts.per_group, opts.max_frames, opts.compact, opts.seed,
+                        up_axis)  # fmt: skip
     human = sum(c.captions is not None for c in clips)
     note = (
         f"{human} of {len(clips)} file(s) with human-written captions from the labels file, the others "
@@ -239,7 +237,7 @@ def prepare_bvh(
     meta["license"] = copy_license(None, sources) or "unknown: no LICENSE file in the sources; check their terms"
     resolved = [Path(p).resolve() for p in sources]
     with staged_folder(out) as build:  # a killed run leaves the old dataset or the new one, never a mixture
-        report = process_and_write(clips, [], resolved, build, jm, options, meta, workers, progress)
+        report = process_and_write(clips, [], resolved, build, jm, saved, meta, opts.workers, opts.progress)
         copy_license(build, sources)
         atomic_write(build / "joint_map.json", lambda tmp: Path(tmp).write_text(json.dumps(jm.to_json(), indent=1)))
         _write_readme(build, sources, report, meta, out.name)
@@ -285,8 +283,7 @@ def ensure_prepared_bvh(
     sources = [src] if isinstance(src, str | Path) else list(src)
     out = Path(out)
     keys = ("units_to_metres", "per_group", "max_frames", "compact", "seed", "up_axis")
-    defaults = {"units_to_metres": None, "per_group": None, "max_frames": None, "compact": False, "seed": 0,
-                "up_axis": "auto"}  # fmt: skip
+    defaults = {"units_to_metres": None, "up_axis": "auto", **asdict(PrepareOptions())}
     wanted = bvh_options(labels, joint_map, *({**defaults, **opts}[k] for k in keys))
     report_path = out / "report.json"
     if (out / "meta.json").is_file() and report_path.is_file():

@@ -23,6 +23,7 @@ from motiondiff.data.preparing.captions import GENERATED_NOTE
 from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import (  # noqa: F401  (PrepareError, check_output, caption_seed, load_held_out: part of this module's API)
     PrepareError,
+    PrepareOptions,
     _write_license_and_readme,
     caption_seed,
     check_output,
@@ -35,23 +36,21 @@ from motiondiff.data.sources import bandai
 def prepare_bandai(
     sources: list[str | Path],
     out: str | Path,
-    per_group: int | None = None,
-    max_frames: int | None = None,
-    compact: bool = False,
-    seed: int = 0,
-    workers: int | None = None,
-    force: bool = False,
-    progress: bool = True,
+    *,
     caption_variants: int = 12,
     rare_to_train: int = 3,
     held_out: list[str | Path] = (),
+    **options,
 ) -> dict:
     """Prepare Bandai Namco releases into `out`; returns the report (also saved as report.json).
     `caption_variants`: generated sentences in varied wording per clip, beside the three label/measured ones;
     `rare_to_train`: every clip of a content label with fewer clips than this goes to train (0: none);
-    `held_out`: JSON files of descriptions ({"descriptions": [{"text": ...}]}) no generated caption may equal."""
+    `held_out`: JSON files of descriptions ({"descriptions": [{"text": ...}]}) no generated caption may equal.
+    `options`: those every source takes (`writer.PrepareOptions`: per_group, max_frames, compact, seed, workers,
+    force, progress)."""
+    opts = PrepareOptions.of("prepare_bandai", options)
     out = Path(out)
-    check_output(out, force)
+    check_output(out, opts.force)
     joint_map = JointMap.load("bandai_to_smpl22")
     clips, skipped = [], []
     for path in sources:
@@ -60,12 +59,11 @@ def prepare_bandai(
         skipped += [(s.name, s.reason) for s in bad]
     if not clips:
         raise PrepareError("no usable clips in " + ", ".join(map(str, sources)))
-    options = {"compact": compact, "per_group": per_group, "max_frames": max_frames, "seed": seed,
-               "caption_variants": caption_variants, "rare_to_train": rare_to_train,
-               "held_out": [str(p) for p in held_out]}  # fmt: skip
+    saved = {**opts.saved(), "caption_variants": caption_variants, "rare_to_train": rare_to_train,
+             "held_out": [str(p) for p in held_out]}  # fmt: skip
     meta = {"captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}
     with staged_folder(out) as build:  # a killed run leaves the old dataset or the new one, never a mixture
-        report = process_and_write(clips, skipped, sources, build, joint_map, options, meta, workers, progress)
+        report = process_and_write(clips, skipped, sources, build, joint_map, saved, meta, opts.workers, opts.progress)
         _write_license_and_readme(build, sources, report, out.name)
     return report
 

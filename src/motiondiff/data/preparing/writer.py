@@ -12,8 +12,9 @@ import hashlib
 import json
 import os
 from collections import Counter
+from collections.abc import Mapping
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +41,37 @@ from motiondiff.runtime.atomic import atomic_write
 
 class PrepareError(ValueError):
     """A problem with the command's inputs or output folder, found before any work is done."""
+
+
+@dataclass(frozen=True)
+class PrepareOptions:
+    """The options every source's preparation takes (the ``**options`` of prepare_bandai and prepare_bvh), declared
+    once. `per_group`: keep at most N clips per dataset x content x style (a subset); `max_frames`: crop longer
+    clips to their most active N frames (20 fps); `compact`: leave out derived arrays (recomputed on load); `seed`:
+    of the subset, split and captions; `workers`: processes (None: up to 4); `force`: replace a prepared dataset
+    already in the output; `progress`: show a progress bar."""
+
+    per_group: int | None = None
+    max_frames: int | None = None
+    compact: bool = False
+    seed: int = 0
+    workers: int | None = None
+    force: bool = False
+    progress: bool = True
+
+    @classmethod
+    def of(cls, caller: str, options: Mapping) -> PrepareOptions:
+        """The `options` given to `caller`; TypeError naming any it does not take."""
+        names = [f.name for f in fields(cls)]
+        unknown = sorted(set(options) - set(names))
+        if unknown:
+            raise TypeError(f"{caller}() got unexpected keyword argument(s) {', '.join(unknown)}; its preparation "
+                            f"options are {', '.join(names)}")  # fmt: skip
+        return cls(**options)
+
+    def saved(self) -> dict:
+        """The ones that shape the data, saved in report.json (workers, force and progress do not)."""
+        return {"compact": self.compact, "per_group": self.per_group, "max_frames": self.max_frames, "seed": self.seed}
 
 
 @dataclass
