@@ -174,7 +174,7 @@ CASES = [
     Case("length_negative", sample("text=walk", "length=-3"), UsageError, "length=-3: must be a number > 0"),
     Case("length_beyond_maximum", sample("text=walk", "length=600"), UsageError, "ask for a shorter length"),
     Case("num_samples_zero", sample("text=walk", "num_samples=0"), UsageError, "num_samples=0: must be an integer >= 1"),
-    Case("guidance_negative", sample("text=walk", "guidance=-1"), UsageError, "guidance must be >= 0"),
+    Case("guidance_negative", sample("text=walk", "guidance=-1"), UsageError, "guidance=-1: must be a number >= 0"),
     Case("steps_beyond_the_diffusion", sample("text=walk", "steps=5000"), UsageError, "steps must be between 1 and the model's 1000"),
     Case("action_for_a_text_model", lambda tmp: run_entry("sample", tmp, f"checkpoint={REPO}/checkpoints/models/bandai_text_cpu.safetensors",
                                                           "export=none", "action=walk"), UsageError, "this model is text-conditioned"),
@@ -183,7 +183,7 @@ CASES = [
     Case("checkpoint_missing", lambda tmp: run_entry("sample", tmp, "checkpoint=/no/such/model.ckpt", "text=walk"), UsageError, "not found"),
     Case("prompts_file_missing", lambda tmp: run_entry("sample", tmp, "checkpoint=shipped", f"prompts_file={tmp}/none.txt"), UsageError, "not found"),
     Case("prompts_file_empty", _prompts_file("\n  \n"), UsageError, "has no prompts"),
-    Case("timed_prompt_zero_seconds", sample("prompts=[a person walks:0, a person waves:2]"), UsageError, "must be positive"),
+    Case("timed_prompt_zero_seconds", sample("prompts=[a person walks:0, a person waves:2]"), UsageError, "seconds after the colon must be a number in"),
     Case("export_unknown_format", sample("text=walk", "export=[usd]"), UsageError, "choose from mp4, gif, bvh, html"),
     Case("cleanup_unknown", sample("text=walk", "cleanup=hands"), UsageError, "unknown clean-up 'hands'; choose cleanup=bones"),
     # commands: edit.py and evaluate.py

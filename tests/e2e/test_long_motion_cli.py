@@ -60,7 +60,7 @@ def test_timed_actions_make_one_long_motion(action_ckpt, tmp_path):
     "overrides, message",
     [
         (["prompts=[a person walks:2, a person waves]"], "these have no time: 'a person waves'"),
-        (["prompts=[a person walks:2, a person waves:0]"], "must be positive"),
+        (["prompts=[a person walks:2, a person waves:0]"], "seconds after the colon must be a number in"),
         (["prompts=[a person walks:2, a person waves:2]", "overlap=4"], "overlap is the seconds"),
         (["prompts=[a person walks:2, a person waves:2]", "overlap=0.5", "blend=0.5"], "blend is the seconds"),
     ],
@@ -97,8 +97,8 @@ def test_parse_timed_prompts():
     assert parse_timed_prompts(["note: 3 steps:2"]) == [("note: 3 steps", 2.0)]  # the last colon carries the time
     for items, message in [
         (["walks:4", "waves"], "these have no time: 'waves'"),
-        (["walks:4", "waves:-1"], "must be positive"),
-        (["walks:0"], "must be positive"),
+        (["walks:4", "waves:-1"], "must be a number in"),
+        (["walks:0"], "must be a number in"),
         ([":3"], "no prompt before the colon"),
     ]:
         with pytest.raises(UsageError, match=message):

@@ -34,7 +34,7 @@ def test_guidance_must_be_finite(name, rules, value):
         check(_cfg(name, f"guidance={value}"), rules)
 
 
-@pytest.mark.parametrize("override", ["sampler.eta=nan", "rho=inf", "+extra.deep=[1, nan]"])
+@pytest.mark.parametrize("override", ["+sampler.rho=nan", "rho=inf", "+extra.deep=[1, nan]"])
 def test_any_number_of_the_config_must_be_finite(override):
     key = override.lstrip("+").split("=")[0]
     with pytest.raises(UsageError, match="must be a finite number") as err:

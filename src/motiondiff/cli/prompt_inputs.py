@@ -5,19 +5,16 @@ prompts_file= or action=), a readable UTF-8 prompts file with prompts in it, non
 from __future__ import annotations
 
 import copy
-import math
-import re
 from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.runtime.errors import UsageError
-from motiondiff.runtime.prompt_text import check_text
+from motiondiff.runtime.prompt_text import check_long_seconds, check_text, split_time
 from motiondiff.runtime.scripting import literal
+from motiondiff.runtime.settings import MAX_PROMPTS, MAX_PROMPTS_FILE_BYTES, MAX_SEGMENTS, check_count
 
 SOURCES = ("text", "prompts", "prompts_file", "action")
-# "<text>:<seconds>", seconds a positive decimal, optionally "4s"; a colon not followed by a number is text
-TIMED = re.compile(r"^(?P<text>.*?)\s*:\s*(?P<seconds>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*s?\s*$")
 
 
 def check_one_source(cfg: DictConfig) -> None:
@@ -26,19 +23,33 @@ def check_one_source(cfg: DictConfig) -> None:
 
 
 def read_prompts_file(path: str | Path) -> list[str]:
-    """The non-blank lines of a UTF-8 prompts file, or one clear error (missing, not UTF-8, no prompts)."""
+    """The non-blank lines of a UTF-8 prompts file, or one clear error (missing, not a file, over
+    MAX_PROMPTS_FILE_BYTES (refused unread), not UTF-8, no prompts)."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise UsageError(f"prompts_file {path} not found")
+    if not path.is_file():
+        raise UsageError(f"prompts_file {path} is not a regular file (a folder, device or pipe): give a text file")
+    size = path.stat().st_size
+    if size > MAX_PROMPTS_FILE_BYTES:
+        raise UsageError(f"prompts_file {path} has {size:,} bytes; at most {MAX_PROMPTS_FILE_BYTES:,} (one prompt a "
+                         "line): split it into several runs")  # fmt: skip
     texts = [line for line in path.read_text(encoding="utf-8").splitlines() if line.strip()]
     if not texts:
         raise UsageError(f"prompts_file {path} has no prompts (one per line)")
+    check_count("prompts", len(texts), MAX_PROMPTS, "split them into several runs")
     return texts
 
 
 def check_prompt_inputs(cfg: DictConfig) -> None:
     """Every check of the prompts that needs no model (the model's own checks follow once it is loaded)."""
     check_one_source(cfg)
+    for key in ("prompts", "action"):
+        value = cfg.get(key)
+        if isinstance(value, ListConfig | list):
+            if not value:
+                raise UsageError(f"{key}=[] holds nothing to generate: give at least one, e.g. {key}=[...] or drop it")
+            check_count(key, len(value), MAX_PROMPTS, "split them into several runs")
     plain, _ = split_timed(cfg)
     if plain.get("prompts_file") is not None:
         texts = read_prompts_file(plain.prompts_file)
@@ -53,24 +64,18 @@ def check_prompt_inputs(cfg: DictConfig) -> None:
 def parse_timed_prompts(items: list[str]) -> list[tuple[str, float]] | None:
     """["a person walks:4", "a person waves:2.5"] -> [("a person walks", 4.0), ("a person waves", 2.5)]; None when
     no item ends in :<seconds> (separate samples, as before). Every item or none must be timed."""
-    matches = [TIMED.match(str(item)) for item in items]
-    if not any(matches):
+    parsed = [split_time(str(item)) for item in items]
+    if all(seconds is None for _, seconds in parsed):
         return None
-    untimed = [str(item) for item, m in zip(items, matches, strict=True) if m is None]
+    untimed = [str(item) for item, (_, seconds) in zip(items, parsed, strict=True) if seconds is None]
     if untimed:
         raise UsageError(
             f"either every prompt ends in :<seconds> (one long motion through them) or none does (separate "
             f"samples); these have no time: {', '.join(repr(u) for u in untimed)}"
         )
-    timed = []
-    for m in matches:
-        text, seconds = m["text"].strip(), float(m["seconds"])
-        if not text:
-            raise UsageError(f"{m.string!r} has a time but no prompt before the colon")
-        if not (seconds > 0 and math.isfinite(seconds)):
-            raise UsageError(f"{m.string!r}: the seconds after the colon must be positive")
-        timed.append((text, seconds))
-    return timed
+    check_count("timed prompts", len(parsed), MAX_SEGMENTS, "make several long motions")
+    check_long_seconds([seconds for _, seconds in parsed])
+    return parsed
 
 
 def split_timed(cfg: DictConfig) -> tuple[DictConfig, list[float] | None]:

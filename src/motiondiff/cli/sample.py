@@ -18,7 +18,7 @@ from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps, to_dict
 from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma
-from motiondiff.cli.prompt_inputs import check_one_source, read_prompts_file, split_timed
+from motiondiff.cli.prompt_inputs import check_one_source, check_prompt_inputs, read_prompts_file, split_timed
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.export.outputs import check_formats_for
 from motiondiff.lit.conditions import check_action, generation_frames
@@ -69,7 +69,8 @@ def run(cfg: DictConfig) -> Path:
         raise UsageError(f"unknown method={cfg.method!r}; choose mdm, vvmdm or guidedmotion")
     out = Path(HydraConfig.get().runtime.output_dir)
     ckpt = find_model(cfg.checkpoint, cfg.paths.output_dir, "action" if cfg.action is not None else "text")
-    plain, seconds = split_timed(cfg)  # prompt syntax errors before the model loads
+    check_prompt_inputs(cfg)  # prompt text, counts and syntax before the model loads (the entry did it too)
+    plain, seconds = split_timed(cfg)
     if seconds is not None:  # a long motion's windows chain, sampled in one batch
         check_num_samples(cfg.num_samples, MAX_LONG_SAMPLES)
         if cfg.frames is not None:
@@ -80,9 +81,7 @@ def run(cfg: DictConfig) -> Path:
     prompts = collect_prompts(plain, module)
     frames = generation_frames(module, cfg.length, frames=cfg.frames) if seconds is None else None
     sigma = smoothing_sigma(cfg, module)
-    guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)
-    if guidance < 0:
-        raise UsageError(f"guidance must be >= 0, got {guidance}")
+    guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)  # checked >= 0 by the rules
     steps = sampling_steps(cfg, module)
     apply_clip_x0(cfg, module)
     shape = feed_forward_shape(module, int(cfg.num_samples), frames or int(module.hparams.max_frames))

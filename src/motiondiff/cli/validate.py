@@ -10,64 +10,11 @@ not, must be finite: ``guidance=nan`` would otherwise sample NaN motions and wri
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
 
 from omegaconf import DictConfig, OmegaConf
 
 from motiondiff.runtime.errors import UsageError
-
-
-def _first(*values):
-    return next((v for v in values if v is not None), None)
-
-
-def _number(bound: float) -> str:
-    return str(bound) if isinstance(bound, int) else f"{bound:g}"  # an integer prints whole (2**63-1, not 9.2e+18)
-
-
-@dataclass(frozen=True)
-class Rule:
-    kind: type  # int or float (an int passes as a float); str for a choice
-    low: float | None = None  # inclusive
-    above: float | None = None  # exclusive lower bound
-    high: float | None = None  # inclusive
-    below: float | None = None  # exclusive upper bound
-    choices: tuple | Callable[[], tuple] | None = None  # a callable is asked when checking (heavy imports)
-    optional: bool = False  # null allowed
-
-    @property
-    def options(self) -> tuple | None:
-        return self.choices() if callable(self.choices) else self.choices
-
-    def describe(self) -> str:
-        if self.choices:
-            return "one of " + ", ".join(map(str, self.options))
-        parts = ["an integer" if self.kind is int else "a number"]
-        lower, upper = _first(self.low, self.above), _first(self.high, self.below)
-        if lower is not None and upper is not None:  # a two-sided range as an interval: "in (0, 1]"
-            left, right = "[" if self.low is not None else "(", "]" if self.high is not None else ")"
-            parts.append(f"in {left}{_number(lower)}, {_number(upper)}{right}")
-            return " ".join(parts) + (" (or null)" if self.optional else "")
-        for sign, bound in ((">=", self.low), (">", self.above), ("<=", self.high), ("<", self.below)):
-            if bound is not None:
-                parts.append(f"{sign} {_number(bound)}")
-        return " ".join(parts) + (" (or null)" if self.optional else "")
-
-    def accepts(self, value) -> bool:
-        if value is None:
-            return self.optional
-        if self.choices:
-            return value in self.options
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            return False
-        if self.kind is int and not isinstance(value, int):
-            return False
-        if not math.isfinite(value):
-            return False
-        return ((self.low is None or value >= self.low) and (self.above is None or value > self.above)
-                and (self.high is None or value <= self.high)
-                and (self.below is None or value < self.below))  # fmt: skip
+from motiondiff.runtime.settings import EVALUATION, GENERATION, POSITIVE_INT, SEED, Rule
 
 
 def _representations() -> tuple:
@@ -76,8 +23,6 @@ def _representations() -> tuple:
     return tuple(REPRESENTATIONS)
 
 
-POSITIVE_INT = Rule(int, low=1)
-SEED = Rule(int, low=0, high=2**63 - 1)  # torch.Generator.manual_seed takes at most 64 bits
 COMMON = {"seed": SEED, "paths.output_dir": Rule(str)}
 MODEL = {"model.d_model": POSITIVE_INT, "model.num_layers": POSITIVE_INT, "model.num_heads": POSITIVE_INT,
          "model.ff_size": POSITIVE_INT, "model.dropout": Rule(float, low=0, below=1)}  # fmt: skip
@@ -92,20 +37,22 @@ RULES_TRAIN = {
 }  # fmt: skip
 # Types, finiteness and plain ranges here, before the model loads; length, frames and steps are checked again by
 # sample/edit against the loaded model (its maximum length and diffusion steps), with messages that say so.
+_SAMPLING = ("guidance", "steps", "length", "frames", "overlap", "blend", "smooth_sigma", "resample")
 RULES_SAMPLE = {
-    **COMMON, "num_samples": POSITIVE_INT, "length": Rule(float, above=0, optional=True),
-    "frames": Rule(int, low=1, optional=True), "steps": Rule(int, low=1, optional=True),
-    "overlap": Rule(float, low=0), "blend": Rule(float, low=0), "smooth_sigma": Rule(float, low=0, optional=True),
-}  # fmt: skip
+    **COMMON,
+    **{key: GENERATION[key] for key in _SAMPLING},
+    "sampler.eta": GENERATION["eta"],
+    "num_samples": POSITIVE_INT,
+}  # its upper bound: lit.generation.check_num_samples, as the API's
 RULES_EDIT = {
     **RULES_SAMPLE, "start": Rule(float, low=0), "prefix": Rule(float, low=0), "suffix": Rule(float, low=0),
     "prefix_s": Rule(float, low=0, optional=True), "suffix_s": Rule(float, low=0, optional=True),
-    "hold_from": Rule(float, above=0, high=1), "reconstruction": Rule(float, low=0), "resample": POSITIVE_INT,
+    "hold_from": Rule(float, above=0, high=1), "reconstruction": Rule(float, low=0),
     "boundary_blend": Rule(int, low=0),
 }  # fmt: skip
 RULES_EVALUATE = {
-    **COMMON, "replications": POSITIVE_INT, "mm_replications": Rule(int, low=0), "guidance": Rule(float, low=0, optional=True),
-    "steps": Rule(int, low=1, optional=True), "batch_size": POSITIVE_INT,
+    **COMMON, **EVALUATION, "guidance": GENERATION["guidance"], "steps": GENERATION["steps"],
+    "split": Rule(str, choices=("train", "val", "test")),
     "evaluator": Rule(str, choices=("released", "official")),
     "prompt_mapping": Rule(str, choices=("none", "nearest", "vote")),  # text.prompt_mapping.MODES; importing
     # motiondiff.text would load the encoders (1.5 s) before any check (tests/unit/text/test_prompt_mapping.py)
@@ -147,8 +94,7 @@ def check(cfg: DictConfig, rules: dict[str, Rule]) -> None:
             if not isinstance(value, str) or not value.strip():
                 raise UsageError(f"{key}={value!r}: must be a non-empty string")
             continue
-        if not rule.accepts(value):
-            raise UsageError(f"{key}={value!r}: must be {rule.describe()}; fix it with {key}=<value>")
+        rule.check(key, value)
     d_model, heads = OmegaConf.select(cfg, "model.d_model"), OmegaConf.select(cfg, "model.num_heads")
     if isinstance(d_model, int) and isinstance(heads, int) and d_model % heads:
         raise UsageError(f"model.num_heads={heads} must divide model.d_model={d_model} (each head gets d_model/heads "

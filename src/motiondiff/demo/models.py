@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.export.blender import blender_command, convert_bvh
-from motiondiff.model_files.resolve import MODELS_DIR, SHIPPED_MODELS
+from motiondiff.model_files.resolve import SHIPPED_MODELS, released_names
 from motiondiff.pipelines import GuidedMotionPipeline, MotionOutput, MotionPipeline
 from motiondiff.runtime.errors import UsageError
 
@@ -92,9 +92,9 @@ def released_choices() -> list[ModelChoice]:
     """The released models: the "text" and "action" aliases first, then other releases in checkpoints/models."""
     choices = [ModelChoice(k, f"{k} (released: {p.stem})", k) for k, p in SHIPPED_MODELS.items() if p.is_file()]
     aliased = {p.stem for p in SHIPPED_MODELS.values()}
-    for path in sorted(MODELS_DIR.glob("*.safetensors")):
-        if path.stem not in aliased:
-            choices.append(ModelChoice(path.stem, f"{path.stem} (released)", path.stem))
+    for name in released_names():  # model releases only (not their .coverage banks)
+        if name not in aliased and name not in SHIPPED_MODELS:
+            choices.append(ModelChoice(name, f"{name} (released)", name))
     return choices
 
 

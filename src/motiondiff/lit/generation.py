@@ -15,8 +15,8 @@ from motiondiff.lit.conditions import condition_batch
 from motiondiff.lit.inpainting import inpaint, known_batch
 from motiondiff.models.bf16_inference import bf16_inference
 from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.settings import MAX_NUM_SAMPLES  # the bounds table
 
-MAX_NUM_SAMPLES = 1000  # motions per prompt (or per edited motion) in one run
 SAMPLE_BATCH = 64  # motions sampled at once: noise and activations for this many, whatever num_samples asks
 MAX_LONG_SAMPLES = SAMPLE_BATCH  # long motions (timed prompts) are sampled in one batch
 

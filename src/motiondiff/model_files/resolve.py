@@ -33,6 +33,12 @@ def find_model(spec: str | Path, output_dir: str | Path | None = None, condition
     """The model file that `spec` names (see the module docstring); `condition` picks what "shipped" means;
     `output_dir` is where "latest"/"best" look for runs (default: this checkout's or folder's outputs/)."""
     key = str(spec)
+    if not isinstance(spec, str | Path) or not key.strip():
+        raise UsageError(f"no model named: give a released model's name ({', '.join(released_names())}) or the path "
+                         "of a .ckpt/.safetensors file")  # fmt: skip
+    if Path(key).name.endswith((".coverage", ".coverage.safetensors")):
+        raise UsageError(f"{key} is a release's prompt-coverage bank, not a model: name the release itself "
+                         f"({key.split('.coverage')[0]})")  # fmt: skip
     if key == "shipped":
         key = condition
     if key in SHIPPED_MODELS and not Path(key).is_file():

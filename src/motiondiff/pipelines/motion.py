@@ -40,8 +40,9 @@ from motiondiff.model_files.resolve import find_model
 from motiondiff.pipelines.coverage import load_coverage, warn_far
 from motiondiff.pipelines.output import MotionOutput
 from motiondiff.runtime.errors import UsageError
-from motiondiff.runtime.hardware import inference_precision
-from motiondiff.runtime.prompt_text import check_text
+from motiondiff.runtime.hardware import inference_precision, resolve_device
+from motiondiff.runtime.prompt_text import check_long_seconds, check_text, split_time
+from motiondiff.runtime.settings import MAX_PROMPTS, MAX_SEGMENTS, check_count, check_settings
 
 
 class MotionPipeline:
@@ -61,7 +62,7 @@ class MotionPipeline:
         samples in bf16 where the hardware runs it natively (measured: docs/results/few_step_sampling.md), "32" in
         full precision, "bf16" forced."""
         path = find_model(name_or_path)
-        return cls(load_model(path, device), str(path), precision)
+        return cls(load_model(path, resolve_device(device)), str(path), precision)
 
     # ---- what the model does ------------------------------------------------------------------------------------
     @property
@@ -104,6 +105,7 @@ class MotionPipeline:
         ``sampler``: auto (the model's own default: DPM-Solver++(2M) unless its recipe chose another on val), dpmpp,
         ddim or ddpm; ``steps``: sampler steps (None: 7 for DPM-Solver++, 50 for DDIM, the whole chain for DDPM, at
         most the model's T); ``smooth_sigma``: vvMDM's Gaussian filter over time, frames."""
+        seed, smooth_sigma = self._seed_and_sigma(seed, smooth_sigma)
         prompts = self._prompts(prompt)
         if frames is None:
             lengths = [self._frames(s) for s in self._per_prompt(seconds, len(prompts), "seconds")]
@@ -114,7 +116,7 @@ class MotionPipeline:
         sampling = self._sampling(guidance, sampler, steps, eta)
         conditions = [p for p in prompts for _ in range(n)]
         lengths = torch.tensor([f for f in lengths for _ in range(n)])
-        generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
+        generator = torch.Generator(device=self.model.device).manual_seed(seed)
         feats = generate_features(self.model, conditions, lengths, batch_size=64, generator=generator,
                                   precision=self.precision, progress=progress, **sampling)  # fmt: skip
         joints = [self.model.representation.decode_numpy(f).astype(np.float32) for f in feats]
@@ -145,18 +147,23 @@ class MotionPipeline:
         the one before, of which the last ``blend`` seconds are cross-faded. ``mode``: how the held frames are kept
         (``edit.inpaint.EDIT_MODES``); ``resample``: RePaint's repeats per step (1: none). Sampling options as for
         a call. results.json gets the windows and, per motion, the speed jump at each seam against its median."""
+        seed, smooth_sigma = self._seed_and_sigma(seed, smooth_sigma)
+        if not isinstance(prompts, list | tuple) or not prompts:
+            raise UsageError("long() takes a list of prompts, e.g. ['a person walks:4', 'a person waves:2']")
+        check_count("timed prompts", len(prompts), MAX_SEGMENTS, "make several long motions")
         items, secs = [], []
         for item, s in zip(prompts, self._per_prompt(seconds, len(prompts), "seconds"), strict=True):
-            text, _, timed = str(item).rpartition(":") if _is_timed(item) else (item, "", "")
+            text, timed = split_time(item)
             items.append(text)
-            secs.append(float(timed) if timed else float(s))
+            secs.append(timed if timed is not None else check_settings(seconds=s)["seconds"])
+        check_long_seconds(secs)
         conditions = self._prompts(items)
         labels = [self._label(c) for c in conditions]
         overlap, blend = check_long_settings(self.model, labels, secs, overlap, blend, mode, resample)
         far = warn_far(self.model, self.coverage, conditions)
         n = check_num_samples(num_samples, MAX_LONG_SAMPLES)  # a long motion's windows chain: one batch
         sampling = self._sampling(guidance, sampler, steps, eta)
-        generator = torch.Generator(device=self.model.device).manual_seed(int(seed))
+        generator = torch.Generator(device=self.model.device).manual_seed(seed)
         segments = [(repeated(self.model, c, n), s) for c, s in zip(conditions, secs, strict=True)]
         try:
             with sampling_precision(self.model, self.precision):
@@ -165,7 +172,7 @@ class MotionPipeline:
                                        progress=progress, **sampling)  # fmt: skip
         except ValueError as err:
             raise UsageError(str(err)) from None
-        info = {"model": self.source, "segments": result.segments, "seed": int(seed), **sampling,
+        info = {"model": self.source, "segments": result.segments, "seed": seed, **sampling,
                 "coverage_warnings": far, "long_motion": long_motion_info(result, mode, self.model),
                 "per_motion": seam_rows(result, smooth_sigma)}  # fmt: skip
         title = ", ".join(f"{label}:{s:g}" for label, s in zip(labels, secs, strict=True))
@@ -193,12 +200,13 @@ class MotionPipeline:
 
     # ---- helpers ------------------------------------------------------------------------------------------------
     def _edited(self, fn, source: InputMotion, prompt, options: dict, num_samples, seed, sampling) -> MotionOutput:
+        seed, _ = self._seed_and_sigma(seed, None)
         condition = None if prompt is None else self._prompts(prompt)[0]
         warn_far(self.model, self.coverage, [condition])
         try:
             with sampling_precision(self.model, self.precision):
                 result = fn(self.model, source, condition=condition, num_samples=self._count(num_samples),
-                            seed=int(seed), **options, **sampling)  # fmt: skip
+                            seed=seed, **options, **self._edit_sampling(sampling))  # fmt: skip
         except (EditError, ValueError) as err:
             raise UsageError(str(err)) from None
         info = {"model": self.source, "input": source.source, **result.settings}
@@ -236,6 +244,7 @@ class MotionPipeline:
         items = list(prompt) if isinstance(prompt, list | tuple) else [prompt]
         if not items:
             raise UsageError("give at least one prompt")
+        check_count("prompts", len(items), MAX_PROMPTS, "call again with the rest")
         kind = self.condition_kind
         if kind == "none":
             if any(p is not None for p in items):
@@ -268,19 +277,21 @@ class MotionPipeline:
         return check_num_samples(num_samples)  # 1..MAX_NUM_SAMPLES
 
     def _sampling(self, guidance, sampler, steps, eta) -> dict:
-        guidance = self.model.default_guidance if guidance is None else guidance
-        if isinstance(guidance, bool) or not isinstance(guidance, int | float) or not 0 <= guidance < float("inf"):
-            raise UsageError(f"guidance must be a number >= 0, got {guidance!r}")
+        checked = check_settings(guidance=guidance, steps=steps, eta=eta)  # the commands' rules (runtime.settings)
+        guidance = self.model.default_guidance if checked["guidance"] is None else checked["guidance"]
         if sampler not in ("auto", *SAMPLER_STEPS):
             raise UsageError(f"sampler must be auto or one of {', '.join(SAMPLER_STEPS)}, got {sampler!r}")
         sampler = self.model.resolve_sampler(sampler)
-        steps = fitted_steps(self.model, steps, SAMPLER_STEPS[sampler])
-        return {"guidance": float(guidance), "sampler": sampler, "steps": steps, "eta": float(eta)}
+        steps = fitted_steps(self.model, checked["steps"], SAMPLER_STEPS[sampler])
+        return {"guidance": float(guidance), "sampler": sampler, "steps": steps, "eta": checked["eta"]}
 
+    @staticmethod
+    def _seed_and_sigma(seed, smooth_sigma) -> tuple[int, float | None]:
+        checked = check_settings(seed=seed, smooth_sigma=smooth_sigma)
+        return checked["seed"], checked["smooth_sigma"]
 
-def _is_timed(item) -> bool:
-    text, sep, tail = str(item).rpartition(":")
-    try:
-        return bool(sep) and bool(text.strip()) and float(tail) > 0
-    except ValueError:
-        return False
+    @staticmethod
+    def _edit_sampling(sampling: dict) -> dict:
+        """An edit's sampling keywords checked by the same rules as a call's (guidance, steps, eta, resample)."""
+        ruled = {k: sampling[k] for k in ("guidance", "steps", "eta", "resample") if k in sampling}
+        return {**sampling, **check_settings(**ruled)}

@@ -3,6 +3,7 @@ export or show them."""
 
 from __future__ import annotations
 
+import numbers
 import tempfile
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -25,6 +26,8 @@ from motiondiff.export.render import render_motion
 from motiondiff.export.smpl_mesh import render_body
 from motiondiff.geometry.skeleton import Skeleton
 from motiondiff.runtime.atomic import finite_or_null, save_npy, write_json
+from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.settings import check_settings
 
 
 @dataclass
@@ -83,8 +86,8 @@ class MotionOutput:
         formats = parse_formats(list(formats) if not isinstance(formats, str) else formats)
         body = body if body is not None else render_body(render, smpl_model)
         check_formats_for(formats, self.representation.skeleton, rig_names, body)
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        self._check_finite()
+        folder = _output_folder(folder)
         long = self.info.get("long_motion")  # one motion through several prompts: long_<prompts joined by "then">_<k>
         names = [" then ".join(str(s["label"]) for s in long["segments"])] * len(self) if long else self.prompts
         stems = motion_stems(names, "long_" if long else "")  # <prompt>_<k>, as the commands
@@ -141,9 +144,10 @@ class MotionOutput:
 
     def smoothed(self, sigma: float | None) -> MotionOutput:
         """These motions through vvMDM's Gaussian filter over time (``sigma`` in frames; None or 0: unchanged)."""
+        sigma = check_settings(smooth_sigma=sigma)["smooth_sigma"]
         if not sigma:
             return self
-        joints = [smooth_joints(j, float(sigma)) for j in self.joints]
+        joints = [smooth_joints(j, sigma) for j in self.joints]
         return replace(self, joints=joints, info={**self.info, "smooth_sigma": float(sigma), "joints_changed": True})
 
     def cleaned(self, *cleanups: str) -> MotionOutput:
@@ -162,6 +166,7 @@ class MotionOutput:
 
     def to_bvh(self, i: int = 0) -> str:
         """The text of motion ``i`` as a BVH file (the model's rotations where it has them, else solved by IK)."""
+        i = self._index(i)
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(export_features(Path(tmp) / "motion", self.representation, self.features[i], self.fps,
                                         ["bvh"], joints=self._changed(i))["bvh"])  # fmt: skip
@@ -169,6 +174,7 @@ class MotionOutput:
 
     def show(self, i: int = 0):
         """An interactive 3D view of motion ``i`` for a notebook (an IPython HTML object; its HTML in plain Python)."""
+        i = self._index(i)
 
         with tempfile.TemporaryDirectory() as tmp:
             html = export_html(Path(tmp) / "motion.html", self.joints[i], self.skeleton, self.fps,
@@ -182,7 +188,7 @@ class MotionOutput:
     def gif(self, i: int = 0, dpi: int = 60):
         """Motion ``i`` as an animated GIF for a notebook (an IPython Image; the GIF bytes in plain Python). Unlike
         ``show``'s interactive viewer, an image output stays in a saved notebook and shows on code hosts."""
-
+        i = self._index(i)
         with tempfile.TemporaryDirectory() as tmp:
             data = render_motion(self.joints[i], self.skeleton, Path(tmp) / "motion.gif", title=self.prompts[i] or "",
                                  fps=self.fps, dpi=dpi).read_bytes()  # fmt: skip
@@ -192,6 +198,36 @@ class MotionOutput:
             return data
         return Image(data=data, format="gif")
 
+    def _check_finite(self) -> None:
+        """Refuse, before any file is written, motions holding NaN or Inf (a diverged sample)."""
+        bad = [i for i, (j, f) in enumerate(zip(self.joints, self.features, strict=True))
+               if not (np.isfinite(j).all() and np.isfinite(f).all())]  # fmt: skip
+        if bad:
+            raise UsageError(f"motion(s) {bad} hold NaN or Inf (a diverged sample); nothing was written: sample "
+                             "them again, e.g. with another seed")  # fmt: skip
+
+    def _index(self, i) -> int:
+        """``i`` as the index of one of these motions, or one UsageError naming the valid range."""
+        if isinstance(i, bool) or not isinstance(i, numbers.Integral) or not -len(self) <= i < len(self):
+            raise UsageError(f"motion index {i!r} is out of range: this output holds {len(self)} motion(s), "
+                             f"0 to {len(self) - 1}")  # fmt: skip
+        return int(i) % len(self)
+
     def _changed(self, i: int) -> np.ndarray | None:
         """The joints when they are not the features decoded as they are (smoothed or edited after decoding)."""
         return self.joints[i] if self.info.get("joints_changed") else None
+
+
+def _output_folder(folder) -> Path:
+    """``folder`` created (parents too) as a writable folder, or one UsageError saying what it is and what to do."""
+    if not isinstance(folder, str | Path) or not str(folder).strip():
+        raise UsageError(f"save() takes a folder path (str or Path), got {type(folder).__name__}: e.g. save('out')")
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"{folder} is a file, not a folder: save into a folder (a new or existing one)")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise UsageError(f"cannot create the folder {folder}: {err.strerror or err}; choose a folder you can write "
+                         "to") from None  # fmt: skip
+    return folder

@@ -112,7 +112,9 @@ def resolve_device(name: str) -> str:
     if name.startswith("mps") and not torch.backends.mps.is_available():
         raise UsageError(f"device={name} but MPS is not available here; use device=auto or cpu")
     try:
-        torch.device(name)
+        kind = torch.device(name).type
     except RuntimeError:
-        raise UsageError(f"unknown device={name!r}; use auto, cpu, cuda or cuda:<index>") from None
+        kind = None
+    if kind not in ("cpu", "cuda", "mps"):  # meta, xla, ...: torch names them, but no motion can be sampled there
+        raise UsageError(f"unknown device={name!r}; use auto, cpu, cuda or cuda:<index>")
     return name
