@@ -12,9 +12,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from motiondiff.demo import DemoModels, build_demo
+from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.scripting import quiet_tool_caches, user_errors
+from motiondiff.runtime.settings import check_settings
 
 
 def parser() -> argparse.ArgumentParser:
@@ -43,6 +46,18 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     return parser().parse_args(args)
 
 
+def check_args(args: argparse.Namespace) -> None:
+    """The port, the initial settings and the output folder (created if missing), refused before any model loads."""
+    if not 1 <= args.port <= 65535:
+        raise UsageError(f"--port {args.port}: must be a port number from 1 to 65535 (e.g. 7860)")
+    check_settings(seconds=args.seconds, steps=args.steps)
+    if args.output_dir is not None:
+        out = Path(args.output_dir)
+        if out.exists() and not out.is_dir():
+            raise UsageError(f"--output-dir {out} is a file, not a folder: give a folder (it is created if missing)")
+        out.mkdir(parents=True, exist_ok=True)
+
+
 def _yes(value: str) -> bool:
     return value.strip().lower() in ("1", "true", "yes", "on")
 
@@ -50,6 +65,7 @@ def _yes(value: str) -> bool:
 @user_errors
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(sys.argv[1:] if argv is None else argv)
+    check_args(args)  # before the models load (seconds of CPU)
     quiet_tool_caches()
 
     models = DemoModels(guided=args.guided, local_model=args.local_model)

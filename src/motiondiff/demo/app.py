@@ -61,6 +61,7 @@ def build_demo(
     default = default or models.choices[0].key
     first = models.info(default)
     root = Path(output_dir) if output_dir else Path(tempfile.mkdtemp(prefix="motiondiff-demo-"))
+    root.mkdir(parents=True, exist_ok=True)  # a folder that does not exist yet is made, not failed on per request
 
     def on_model(key):
         info = models.info(key)

@@ -6,6 +6,7 @@ same representation), so an edit starts from what the model knows how to continu
 
 from __future__ import annotations
 
+import errno
 import logging
 import os
 from dataclasses import dataclass, field
@@ -61,6 +62,27 @@ class InputMotion:
         return len(self.features)
 
 
+def _check_input_file(path: Path) -> None:
+    """A readable regular file, or one EditError that says what the path is instead (a folder, a pipe or device,
+    a link loop, a file this user may not read, an empty file) and what to do."""
+    try:
+        path.stat()
+    except OSError as err:
+        if err.errno == errno.ELOOP:
+            raise EditError(f"input {path} is a symbolic link that loops; point it at a motion file") from None
+        if not os.path.lexists(path) or err.errno == errno.ENOENT:
+            raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path") from None
+        raise EditError(f"input {path} cannot be read ({err.strerror}); check the path") from None
+    if path.is_dir():
+        raise EditError(f"input {path} is a folder: give a .bvh/.npy/.npz file inside it")
+    if not path.is_file():
+        raise EditError(f"input {path} is a pipe or device, not a file: give a .bvh/.npy/.npz file")
+    if not os.access(path, os.R_OK):
+        raise EditError(f"input {path} is not readable by this user (permission denied): check its permissions")
+    if path.stat().st_size == 0:
+        raise EditError(f"input {path} is empty (0 bytes): give a motion file with frames in it")
+
+
 def load_input_motion(
     source: str | os.PathLike,
     module,
@@ -99,8 +121,7 @@ def load_input_motion(
     except ValueError as err:
         raise EditError(str(err)) from None
     if path.suffix.lower() in (".bvh", ".npy", ".npz"):
-        if path.is_dir() or not path.is_file():
-            raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path")
+        _check_input_file(path)
         if path.suffix.lower() != ".bvh":
             _check_array_sizes(path)
         if path.suffix.lower() == ".bvh" or _holds_smpl_params(path):
@@ -109,6 +130,11 @@ def load_input_motion(
         else:
             features, window, total, up = _npy_features(path, module, start, frames, up_axis)
         return _input_motion(module, features, text, window, total, {"up": up})
+    if path.is_dir():
+        raise EditError(f"input {path} is a folder: give a .bvh/.npy/.npz file inside it, or a dataset clip id")
+    if path.is_file():
+        raise EditError(f"input {path} is a {path.suffix or 'suffix-less'} file; edit reads .bvh, .npy (joints), .npz "
+                        "(joints or SMPL parameters), or a dataset clip id")  # fmt: skip
     features, info = _dataset_features(text, module, data_root)
     return _dataset_window(module, features, text, start, frames, info)
 
@@ -185,7 +211,7 @@ def _load_joints(path: Path) -> np.ndarray:
     """The joints array of a .npy, or of a .npz (its ``joints`` array, or its only array)."""
     try:
         data = np.load(path, allow_pickle=False)
-    except (ValueError, OSError) as err:
+    except (ValueError, OSError, EOFError) as err:
         raise EditError(f"{path}: not a readable {path.suffix} array ({err})") from None
     if not isinstance(data, np.lib.npyio.NpzFile):
         return data
@@ -194,7 +220,7 @@ def _load_joints(path: Path) -> np.ndarray:
         if "joints" in names or len(names) == 1:
             try:
                 return data["joints" if "joints" in names else names[0]]
-            except (ValueError, OSError) as err:
+            except (ValueError, OSError, EOFError) as err:
                 raise EditError(f"{path}: its joints array cannot be read ({err})") from None
     raise EditError(f"{path}: holds arrays {', '.join(names) or '(none)'}; name the joint positions 'joints' "
                     "(np.savez(path, joints=...)) or save them alone as .npy")  # fmt: skip

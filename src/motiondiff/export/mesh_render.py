@@ -76,7 +76,7 @@ def mesh_frames(
     ax.computed_zorder = False  # the ground, then the trail, then the body: the floor never covers the feet
     body = Poly3DCollection(np.zeros((0, 3, 3)), linewidths=0.3, zorder=3)  # edges in the face colour: no seams
     ax.add_collection3d(body)
-    label = ax.text2D(0.5, 0.97, "", transform=ax.transAxes, ha="center", va="top", fontsize=8)
+    label = ax.text2D(0.5, 0.97, "", transform=ax.transAxes, ha="center", va="top", fontsize=8, parse_math=False)
     ground: list = []
 
     def draw(i: int):

@@ -61,7 +61,9 @@ def stick_frames(joints: np.ndarray, skeleton: Skeleton, title: Title = "", dpi:
         follow(ax, azim, trail[i], half)
         text = title_at(title, i)
         if text:
-            ax.text2D(0.5, 0.97, wrap_title(text), transform=ax.transAxes, ha="center", va="top", fontsize=8)
+            ax.text2D(
+                0.5, 0.97, wrap_title(text), transform=ax.transAxes, ha="center", va="top", fontsize=8, parse_math=False
+            )  # a prompt is plain text: "$_$" is not mathtext
         draw_ground(ax, trail, i, half)
         frame = joints[i]
         for chain, color in chains:

@@ -27,6 +27,8 @@ from motiondiff.runtime.processes import alive
 USER_ERRORS = (UsageError, DatasetNotFoundError, RepresentationError)  # raised with a message that names the fix
 LOCK_NAME = ".motiondiff.lock"
 KEPT_OUTPUTS = ("*.ckpt", "*.safetensors")  # what a failed run leaves in place
+# torch.save's own write errors are RuntimeErrors, not OSErrors (a full disk while a checkpoint is written)
+TORCH_WRITE_FAILURES = ("PytorchStreamWriter failed", "file write failed", "No space left on device")
 
 
 def error_line(err: BaseException) -> str | None:
@@ -37,6 +39,10 @@ def error_line(err: BaseException) -> str | None:
         return f"cannot read the input as UTF-8 text ({err.reason} at byte {err.start}): save it as UTF-8"
     if isinstance(err, MemoryError):
         return "out of memory: ask for fewer or shorter motions (num_samples=, length=) or a smaller batch"
+    if isinstance(err, RuntimeError) and any(s in str(err) for s in TORCH_WRITE_FAILURES):
+        return (
+            "a file could not be written (torch.save: the disk is full or the folder went away): free some disk space"
+        )
     if isinstance(err, OSError):
         name = f" {err.filename}" if err.filename else ""
         hint = {errno.ENOSPC: "free some disk space", errno.EACCES: "choose a folder you can write to",

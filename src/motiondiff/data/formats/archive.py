@@ -31,6 +31,8 @@ class Source:
             )
         if self.path.is_dir():
             self._names = _walk(self.path)
+        elif not self.path.is_file():  # a pipe or device would block or never end
+            raise SourceError(f"{self.path} is a pipe or device, not a file: pass a dataset zip or its unzipped folder")
         else:
             try:
                 self._zip = zipfile.ZipFile(self.path)

@@ -35,6 +35,10 @@ class JointMap:
         except FileNotFoundError:
             shipped = sorted(p.name[:-5] for p in (resources.files("motiondiff") / "assets").iterdir())
             raise FileNotFoundError(f"joint map {name_or_path!r} not found; shipped maps: {shipped}") from None
+        keys = ("source", "target", "units_to_metres", "joints")
+        if not isinstance(spec, dict) or any(k not in spec for k in keys) or not isinstance(spec["joints"], dict):
+            raise ValueError(f"joint map {path} must be a JSON object with {', '.join(keys)} (joints: target joint -> "
+                             "source joint); see the shipped maps in motiondiff/assets")  # fmt: skip
         target = get_skeleton(spec["target"])
         missing = [j for j in target.joint_names if j not in spec["joints"]]
         if missing:

@@ -30,6 +30,7 @@ import csv
 import hashlib
 import io
 import json
+import math
 import re
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path, PurePosixPath
@@ -221,6 +222,8 @@ def prepare_bvh(
         raise PrepareError(f"--up-axis: {err}".replace("up_axis=", "")) from None
     if not sources:
         raise PrepareError("no --src given")
+    if units_to_metres is not None and not (math.isfinite(units_to_metres) and units_to_metres > 0):
+        raise PrepareError(f"--units-to-metres {units_to_metres}: must be a positive number (0.01 for centimetres)")
     srcs = [Source(p) for p in sources]
     files = list_files(srcs)
     clips = make_clips(files, {} if labels is None else read_labels(labels, files))

@@ -31,6 +31,7 @@ from motiondiff.data.preparing.writer import (  # noqa: F401  (PrepareError, che
     process_and_write,
 )
 from motiondiff.data.sources import bandai
+from motiondiff.runtime.boundary import error_line
 
 
 def prepare_bandai(
@@ -144,6 +145,16 @@ def main(argv: list[str] | None = None) -> int:
                                     rare_to_train=args.rare_to_train, held_out=args.held_out, **common)  # fmt: skip
     except (PrepareError, SourceError, bandai.BandaiLayoutError) as err:
         print(f"error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("error: interrupted (Ctrl-C); the output folder is as it was before (prepared datasets are swapped "
+              "in whole)", file=sys.stderr)  # fmt: skip
+        return 130
+    except Exception as err:  # noqa: BLE001 - expected failures (disk, permissions, text) as one line; bugs re-raised
+        line = error_line(err)
+        if line is None:
+            raise
+        print(f"error: {line}", file=sys.stderr)
         return 2
     print_report(report, Path(args.out))
     return 0

@@ -69,6 +69,13 @@ class PrepareOptions:
                             f"options are {', '.join(names)}")  # fmt: skip
         return cls(**options)
 
+    def __post_init__(self) -> None:
+        for name, low in (("per_group", 1), ("max_frames", 2), ("workers", 1)):
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < low):
+                flag = "--" + name.replace("_", "-")
+                raise PrepareError(f"{flag} {value!r}: must be a whole number >= {low} (or left out)")
+
     def saved(self) -> dict:
         """The ones that shape the data, saved in report.json (workers, force and progress do not)."""
         return {"compact": self.compact, "per_group": self.per_group, "max_frames": self.max_frames, "seed": self.seed}
