@@ -68,3 +68,40 @@ def test_a_second_run_into_a_folder_in_use_is_refused_and_changes_nothing(tmp_pa
     finally:
         first.kill()
         first.wait()
+
+
+def test_sigterm_while_writing_is_one_line_exit_143_and_leaves_no_folder(tmp_path):
+    """`kill <pid>` (a scheduler's time limit) at the same moment as the Ctrl-C above: exit 143, one line, no
+    folder and no lock left (Python's default would end at once and leave the run's lock)."""
+    (tmp_path / "prompts.txt").write_text(PROMPTS)
+    stderr = tmp_path / "stderr.txt"
+    with stderr.open("w") as err_file:
+        proc = popen_cli(tmp_path, "sample", "checkpoint=shipped", "prompts_file=prompts.txt", "length=1",
+                         "export=[bvh,mp4]", env={"PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE, stderr=err_file,
+                         text=True)  # fmt: skip
+        try:
+            written = wait_for(lambda: any(p.suffix == ".bvh" for p in (tmp_path / "outputs").rglob("*")), 600)
+            assert written and proc.poll() is None, "no sample was written, or the run ended before the SIGTERM"
+            proc.send_signal(signal.SIGTERM)
+            out, _ = proc.communicate(timeout=120)
+        finally:
+            proc.kill()
+    completed = subprocess.CompletedProcess(proc.args, proc.returncode, out, stderr.read_text())
+    assert_refused(completed, "stopped by SIGTERM", code=143)
+    assert files_under(tmp_path / "outputs") == [], "a terminated run left its partial samples or its lock"
+
+
+def test_sigterm_during_training_exits_143_and_keeps_the_checkpoints(tmp_path):
+    run_dir = tmp_path / "run"
+    tiny = ("model.d_model=32", "model.num_layers=1", "model.num_heads=2", "model.ff_size=64", "logger=csv",
+            "condition=none", "trainer.max_steps=100000", "checkpoint_every=5")  # fmt: skip
+    proc = start(tmp_path, "train", *tiny, f"hydra.run.dir={run_dir}")
+    try:
+        assert wait_for(lambda: any((run_dir / "checkpoints").glob("step*.ckpt")), 600), "no checkpoint was written"
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143, f"exit {proc.returncode}: {err[-500:]}"
+    assert "stopped by SIGTERM" in err and "Traceback" not in err
+    assert any((run_dir / "checkpoints").glob("*.ckpt")) and not (run_dir / ".motiondiff.lock").exists()

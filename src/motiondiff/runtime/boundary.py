@@ -15,8 +15,10 @@ import errno
 import functools
 import os
 import shutil
+import signal
 import socket
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -71,6 +73,24 @@ def guarded(fn):
             sys.exit(2)
 
     return wrapper
+
+
+SIGTERM_EXIT = 143  # 128 + SIGTERM, as a shell reports a process the signal ended
+
+
+def stop_on_sigterm() -> None:
+    """Make SIGTERM (`kill`, a scheduler's time limit) end a command like Ctrl-C does: one line, exit code 143, and
+    the run folder cleaned by `run_folder` (a training run keeps its checkpoints). Without it Python dies at once and
+    leaves its lock; Lightning's own handler would end training with exit code 0. Main thread only."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+
+    def stop(signum, frame):
+        print("error: stopped by SIGTERM (a training run keeps its checkpoints: resume with ckpt_path=<its run "
+              "folder>/checkpoints/last.ckpt)", file=sys.stderr)  # fmt: skip
+        raise SystemExit(SIGTERM_EXIT)
+
+    signal.signal(signal.SIGTERM, stop)
 
 
 def _fresh(out: Path, job_name: str) -> bool:

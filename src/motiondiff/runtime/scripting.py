@@ -3,6 +3,7 @@ config resolvers, offline project-local tool caches, one-line user errors, key=v
 
 from __future__ import annotations
 
+import difflib
 import os
 import re
 import secrets
@@ -11,7 +12,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from motiondiff.runtime.boundary import USER_ERRORS, guarded, refuse_if_in_use, run_folder  # noqa: F401  (USER_ERRORS re-exported)
+from motiondiff.runtime.boundary import USER_ERRORS, guarded, refuse_if_in_use, run_folder, stop_on_sigterm  # noqa: F401  (USER_ERRORS re-exported)
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.hardware import (
     fast_cpu_precision,  # torch: imported when a config asks, not to start a command
@@ -108,11 +109,13 @@ def run_hydra(config_name: str, run) -> None:
     register_resolvers()
     quiet_tool_caches()
     if not any(a.startswith("hydra.job.name=") for a in sys.argv[1:]):  # log files named after the command
-        sys.argv.append(f"hydra.job.name={config_name}")
+        sys.argv.insert(1, f"hydra.job.name={config_name}")  # first: Hydra's flags (--cfg job) may end the line
     check_overrides(config_name, sys.argv[1:])
 
     def task(cfg: DictConfig):
         from hydra.core.hydra_config import HydraConfig
+
+        stop_on_sigterm()
 
         hydra_cfg = HydraConfig.get()
         with run_folder(Path(hydra_cfg.runtime.output_dir), hydra_cfg.job.name):
@@ -128,6 +131,7 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
     lines and exit code 1), and no run folder is made. Sweeps (-m) and Hydra's flags are left to Hydra."""
     if any(a.startswith("-") for a in argv):
         return
+    guarded(check_override_kinds)(config_name, argv)
     from hydra import compose, initialize_config_dir
     from hydra.core.global_hydra import GlobalHydra
     from hydra.errors import HydraException
@@ -140,14 +144,51 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
     except (HydraException, OmegaConfBaseException) as err:
         print(f"error: {_override_error(err)}", file=sys.stderr)
         sys.exit(2)
+    except ValueError as err:  # the override parser's own limits (a 5000-digit number: Python's int-string bound)
+        print(f"error: cannot read the command line: {str(err).splitlines()[0][:200]}", file=sys.stderr)
+        sys.exit(2)
     finally:
         GlobalHydra.instance().clear()
     try:
         run_dir = Path(str(OmegaConf.select(cfg, "hydra.run.dir")))
-    except OmegaConfBaseException:
+    except OmegaConfBaseException as err:
+        if "oc.env" in str(err) or "Environment variable" in str(err):  # an unset variable: Hydra would trace
+            print(f"error: the run folder cannot be named: {str(err).splitlines()[0]} (set the variable or give "
+                  "paths.output_dir=)", file=sys.stderr)  # fmt: skip
+            sys.exit(2)
         return  # resolved by Hydra at run time only
     guarded(check_writable)(run_dir)
     guarded(refuse_if_in_use)(run_dir)  # before Hydra writes its config and log into another run's folder
+
+
+# The commands whose configs are closed: a setting added with +key or removed with ~key is a mistake there (training
+# configs are open: +dataset.datamodule.bucket_chunk=N and the like are documented)
+CLOSED_COMMANDS = ("sample", "edit", "evaluate")
+
+
+def check_override_kinds(config_name: str, argv: list[str]) -> None:
+    """Refuse, for the closed commands, a setting added with ``+key=`` (a misspelt ``+lenght=3`` would be ignored)
+    or removed with ``~key`` (the command then fails deep inside), naming the settings that come closest."""
+    if config_name not in CLOSED_COMMANDS:
+        return
+    for arg in argv:
+        key = arg.split("=", 1)[0]
+        if key.startswith(("+", "~")) and not key.lstrip("+~").startswith("hydra."):
+            name = key.lstrip("+~")
+            known = _top_level_keys(config_name)
+            close = difflib.get_close_matches(name.split(".")[0], known, n=3)
+            hint = f" (did you mean {', '.join(close)}?)" if close else ""
+            what = "removes" if key.startswith("~") else "adds"
+            raise UsageError(f"{arg!r} {what} a setting; {config_name} takes only its own settings{hint}: set one as "
+                             f"key=value (`--cfg job` lists them)")  # fmt: skip
+
+
+def _top_level_keys(config_name: str) -> list[str]:
+    text = (CONF_DIR / f"{config_name}.yaml").read_text()
+    return sorted({m.group(1) for m in re.finditer(r"^([A-Za-z_][\w]*):", text, re.MULTILINE)} - {"defaults", "hydra"})
+
+
+NAME_MAX = 255  # bytes in one file or folder name (Linux, macOS and Windows file systems alike)
 
 
 def check_writable(folder: Path) -> None:
@@ -156,6 +197,10 @@ def check_writable(folder: Path) -> None:
     import tempfile
 
     folder = folder.absolute()
+    long = next((part for part in folder.parts if len(part.encode()) > NAME_MAX), None)
+    if long is not None:
+        raise UsageError(f"cannot make the run folder: a folder name of {len(long.encode())} bytes ({long[:24]}...) is "
+                         f"longer than the file system's {NAME_MAX}; choose a shorter hydra.run.dir= or paths.output_dir=")  # fmt: skip
     parent = next((p for p in (folder, *folder.parents) if p.exists()), None)
     if parent is None or not parent.is_dir():
         raise UsageError(f"cannot make the run folder {folder}: {parent} is a file, not a folder (set another "
