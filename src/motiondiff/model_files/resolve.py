@@ -18,7 +18,7 @@ MODELS_DIR = REPO_DIR / "checkpoints" / "models"
 RELEASE_SUFFIXES = (".safetensors", ".json")
 # checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
 SHIPPED_MODELS = {
-    "text": MODELS_DIR / "bandai_text_long_12k.safetensors",  # docs/results/shipping/rules.md
+    "text": MODELS_DIR / "bandai_text_long_42k.safetensors",  # docs/results/shipping/rules.md
     "action": MODELS_DIR / "bandai_action_cpu.safetensors",
 }
 RUN_NAMES = ("latest", "best")
