@@ -109,7 +109,9 @@ def run_hydra(config_name: str, run) -> None:
     register_resolvers()
     quiet_tool_caches()
     if not any(a.startswith("hydra.job.name=") for a in sys.argv[1:]):  # log files named after the command
-        sys.argv.insert(1, f"hydra.job.name={config_name}")  # first: Hydra's flags (--cfg job) may end the line
+        # beside the other overrides (Hydra reads them as one run of words: `-m a=1`, `a=1 --cfg job`)
+        at = next((i for i, a in enumerate(sys.argv) if i and "=" in a and not a.startswith("-")), len(sys.argv))
+        sys.argv.insert(at, f"hydra.job.name={config_name}")
     check_overrides(config_name, sys.argv[1:])
 
     def task(cfg: DictConfig):
