@@ -6,7 +6,6 @@ same representation), so an edit starts from what the model knows how to continu
 
 from __future__ import annotations
 
-import errno
 import logging
 import os
 from dataclasses import dataclass, field
@@ -26,6 +25,7 @@ from motiondiff.data.representations import Representation
 from motiondiff.data.representations.clip import ClipMotion
 from motiondiff.data.representations.hml_features import canonicalize_joints, ground_and_face, skeleton_for_dim
 from motiondiff.edit.canonical import carries_placement, placement, to_canonical
+from motiondiff.edit.input_files import check_input_file
 from motiondiff.edit.masks import EditError
 from motiondiff.geometry.rotations import qrot
 from motiondiff.geometry.skeleton import Skeleton, get_skeleton
@@ -60,27 +60,6 @@ class InputMotion:
     @property
     def num_frames(self) -> int:
         return len(self.features)
-
-
-def _check_input_file(path: Path) -> None:
-    """A readable regular file, or one EditError that says what the path is instead (a folder, a pipe or device,
-    a link loop, a file this user may not read, an empty file) and what to do."""
-    try:
-        path.stat()
-    except OSError as err:
-        if err.errno == errno.ELOOP:
-            raise EditError(f"input {path} is a symbolic link that loops; point it at a motion file") from None
-        if not os.path.lexists(path) or err.errno == errno.ENOENT:
-            raise EditError(f"input {path} not found (relative to {Path.cwd()}); check the path") from None
-        raise EditError(f"input {path} cannot be read ({err.strerror}); check the path") from None
-    if path.is_dir():
-        raise EditError(f"input {path} is a folder: give a .bvh/.npy/.npz file inside it")
-    if not path.is_file():
-        raise EditError(f"input {path} is a pipe or device, not a file: give a .bvh/.npy/.npz file")
-    if not os.access(path, os.R_OK):
-        raise EditError(f"input {path} is not readable by this user (permission denied): check its permissions")
-    if path.stat().st_size == 0:
-        raise EditError(f"input {path} is empty (0 bytes): give a motion file with frames in it")
 
 
 def load_input_motion(
@@ -121,7 +100,7 @@ def load_input_motion(
     except ValueError as err:
         raise EditError(str(err)) from None
     if path.suffix.lower() in (".bvh", ".npy", ".npz"):
-        _check_input_file(path)
+        check_input_file(path)
         if path.suffix.lower() != ".bvh":
             _check_array_sizes(path)
         if path.suffix.lower() == ".bvh" or _holds_smpl_params(path):
