@@ -60,11 +60,13 @@ def test_a_second_run_into_a_folder_in_use_is_refused_and_changes_nothing(tmp_pa
     try:
         assert wait_for(lambda: (run_dir / "csv").exists()), "the first training did not start"
         before = files_under(run_dir)
+        records = {p.name: p.read_bytes() for p in (run_dir / ".hydra").iterdir()}  # the first run's config
         second = run_in_process(tmp_path, "sample", "checkpoint=shipped", "text=walk", "length=1", "export=none",
                                 f"hydra.run.dir={run_dir}")  # fmt: skip
         assert_refused(second, "another run", str(run_dir))
         assert not any(name.startswith("sample") or name.endswith(".npy") for name in files_under(run_dir))
         assert set(before) <= set(files_under(run_dir))
+        assert {p.name: p.read_bytes() for p in (run_dir / ".hydra").iterdir()} == records, "records rewritten"
     finally:
         first.kill()
         first.wait()

@@ -223,7 +223,9 @@ CASES = [
     ),  # fmt: skip
     # non-finite settings, before any model loads
     sample("guidance_inf", None, "guidance=inf", args=("checkpoint=shipped", "guidance=inf"), process=True),
-    sample("eta_nan", None, "sampler.eta=nan", "must be a number in [0, 1]", args=("checkpoint=shipped", "sampler.eta=nan")),
+    sample(
+        "eta_nan", None, "sampler.eta=nan", "must be a number in [0, 1]", args=("checkpoint=shipped", "sampler.eta=nan")
+    ),
     edit("edit_guidance_nan", None, "guidance=nan", args=("checkpoint=shipped", "guidance=nan")),
     # finite weights whose motion is not: refused before anything is written
     sample(

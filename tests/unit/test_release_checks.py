@@ -21,7 +21,13 @@ from motiondiff.runtime.paths import REPO_DIR
 from motiondiff.runtime.safe_pickle import RefusedPickle, load_pickle
 
 MODELS = REPO_DIR / "checkpoints" / "models"
-SHIPPED = ["bandai_mini_text_cpu", "bandai_text_cpu", "bandai_text_long_12k", "bandai_text_long_42k", "bandai_action_cpu"]
+SHIPPED = [
+    "bandai_mini_text_cpu",
+    "bandai_text_cpu",
+    "bandai_text_long_12k",
+    "bandai_text_long_42k",
+    "bandai_action_cpu",
+]
 
 
 @pytest.mark.parametrize("name", SHIPPED)

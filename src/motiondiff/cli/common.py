@@ -11,6 +11,7 @@ from motiondiff.lit.conditions import text_encoder_kwargs  # noqa: F401
 from motiondiff.lit.generation import fitted_steps
 from motiondiff.model_files.resolve import find_model  # noqa: F401  (the commands take it from here)
 from motiondiff.runtime.errors import UsageError  # noqa: F401  (re-exported: the CLI's error type)
+from motiondiff.runtime.file_kinds import file_problem
 from motiondiff.runtime.paths import REPO_DIR
 from motiondiff.runtime.scripting import (  # noqa: F401
     USER_ERRORS,
@@ -75,3 +76,10 @@ def apply_clip_x0(cfg: DictConfig, module) -> str | None:
         except ValueError as err:
             raise UsageError(f"clip_x0={rule}: {err}") from err
     return module.clip_rule
+
+
+def check_ckpt_path(ckpt_path) -> None:
+    """A training command's ``ckpt_path=`` (resume) is a readable file, or one error saying what it is instead."""
+    problem = None if ckpt_path is None else file_problem(ckpt_path)
+    if problem is not None:
+        raise UsageError(f"ckpt_path={ckpt_path} {problem}; pass the last.ckpt of the run to resume")

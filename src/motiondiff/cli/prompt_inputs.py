@@ -10,6 +10,7 @@ from pathlib import Path
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.file_kinds import file_problem
 from motiondiff.runtime.prompt_text import check_long_seconds, check_text, split_time
 from motiondiff.runtime.scripting import literal
 from motiondiff.runtime.settings import MAX_PROMPTS, MAX_PROMPTS_FILE_BYTES, MAX_SEGMENTS, check_count
@@ -26,10 +27,9 @@ def read_prompts_file(path: str | Path) -> list[str]:
     """The non-blank lines of a UTF-8 prompts file, or one clear error (missing, not a file, over
     MAX_PROMPTS_FILE_BYTES (refused unread), not UTF-8, no prompts)."""
     path = Path(path)
-    if not path.exists():
-        raise UsageError(f"prompts_file {path} not found")
-    if not path.is_file():
-        raise UsageError(f"prompts_file {path} is not a regular file (a folder, device or pipe): give a text file")
+    problem = file_problem(path, allow_empty=True)
+    if problem is not None:
+        raise UsageError(f"prompts_file {path} {problem}: give a UTF-8 text file, one prompt a line")
     size = path.stat().st_size
     if size > MAX_PROMPTS_FILE_BYTES:
         raise UsageError(f"prompts_file {path} has {size:,} bytes; at most {MAX_PROMPTS_FILE_BYTES:,} (one prompt a "

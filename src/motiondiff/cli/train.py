@@ -11,7 +11,15 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from motiondiff.cli.common import REPO_DIR, UsageError, text_encoder_kwargs, to_dict, trainer_parts
+from motiondiff.cli.common import (
+    REPO_DIR,
+    UsageError,
+    check_ckpt_path,
+    file_problem,
+    text_encoder_kwargs,
+    to_dict,
+    trainer_parts,
+)
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
@@ -70,8 +78,9 @@ def init_weights(module: MotionDiffusionModule, source: str) -> None:
     path = Path(source)
     if path.suffix in (".safetensors", ".json"):
         path = release_paths(path)[0]
-    if not path.is_file():
-        raise UsageError(f"init_from={source} not found; give a .ckpt of a run or a release (.safetensors)")
+    problem = file_problem(path)
+    if problem is not None:
+        raise UsageError(f"init_from={source} {problem}; give a .ckpt of a run or a release (.safetensors)")
     if path.suffix == ".safetensors":
         with reading(path, "init_from weights"):
             state = load_file(str(path))
@@ -161,8 +170,7 @@ def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_TRAIN)  # types and ranges before any work
     L.seed_everything(cfg.seed, workers=True)
     out = Path(HydraConfig.get().runtime.output_dir)
-    if cfg.ckpt_path is not None and not Path(cfg.ckpt_path).is_file():
-        raise UsageError(f"ckpt_path={cfg.ckpt_path} not found; pass the last.ckpt of the run to resume")
+    check_ckpt_path(cfg.ckpt_path)
     dm: MotionDataModule = instantiate(cfg.dataset.datamodule)
     dm.setup("fit")
     module = build_module(cfg, dm)

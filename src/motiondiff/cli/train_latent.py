@@ -13,7 +13,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from motiondiff.cli.common import UsageError, text_encoder_kwargs, to_dict, trainer_parts
+from motiondiff.cli.common import UsageError, check_ckpt_path, text_encoder_kwargs, to_dict, trainer_parts
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
@@ -78,6 +78,7 @@ def build_module(cfg: DictConfig, vaes: dict[str, MotionVAEModule]) -> Hierarchi
 
 def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_TRAIN)  # types and ranges before any work
+    check_ckpt_path(cfg.ckpt_path)
     vaes = load_vaes(cfg.vae)  # before any other work: a missing VAE fails at once
     L.seed_everything(cfg.seed, workers=True)
     out = Path(HydraConfig.get().runtime.output_dir)

@@ -16,7 +16,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from motiondiff.cli.common import UsageError, to_dict, trainer_parts
+from motiondiff.cli.common import UsageError, check_ckpt_path, to_dict, trainer_parts
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
@@ -62,8 +62,7 @@ def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_TRAIN)  # types and ranges before any work
     tokens = resolve_tokens(cfg.level, cfg.vae.tokens)  # before any work: a bad level fails at once
     ckpt = cfg.ckpt_path
-    if ckpt is not None and not Path(ckpt).is_file():
-        raise UsageError(f"ckpt_path={ckpt} not found; pass the last.ckpt of the run to resume")
+    check_ckpt_path(ckpt)
     L.seed_everything(cfg.seed, workers=True)
     out = Path(HydraConfig.get().runtime.output_dir)
     dm: MotionDataModule = instantiate(cfg.dataset.datamodule)

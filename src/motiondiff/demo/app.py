@@ -18,6 +18,7 @@ from pathlib import Path
 import gradio as gr
 
 from motiondiff.demo.models import MAX_SAMPLES, DemoModels, Sample, download_kinds, edit_parts, generate, glb_note
+from motiondiff.demo.request_folders import request_folder
 from motiondiff.runtime.errors import UsageError
 
 log = logging.getLogger(__name__)
@@ -79,9 +80,9 @@ def build_demo(
         prompt = action if kind == "action" else text
         progress(0.1, desc="sampling")
         try:
-            folder = Path(tempfile.mkdtemp(prefix="run-", dir=root))
-            out, samples = generate(models, key, prompt, folder, seconds=secs, guidance=guidance, seed=seed,
-                                    num_samples=count, steps=n_steps, weights=weights)  # fmt: skip
+            with request_folder(root, "run") as folder:
+                out, samples = generate(models, key, prompt, folder, seconds=secs, guidance=guidance, seed=seed,
+                                        num_samples=count, steps=n_steps, weights=weights)  # fmt: skip
         except UsageError as err:
             gr.Warning(str(err))
             return [f"**Please fix:** {err}", None, *_hidden_slots()]
@@ -101,9 +102,9 @@ def build_demo(
         kind = models.info(key).kind
         prompt = action if kind == "action" else text
         try:
-            folder = Path(tempfile.mkdtemp(prefix="edit-", dir=root))
-            out, samples = edit_parts(models, key, last, prompt, parts, folder, seed=seed, steps=n_steps,
-                                      guidance=guidance)  # fmt: skip
+            with request_folder(root, "edit") as folder:
+                out, samples = edit_parts(models, key, last, prompt, parts, folder, seed=seed, steps=n_steps,
+                                          guidance=guidance)  # fmt: skip
         except UsageError as err:
             gr.Warning(str(err))
             return [f"**Please fix:** {err}", last, *_hidden_slots()]

@@ -111,6 +111,8 @@ def load_input_motion(
         return _input_motion(module, features, text, window, total, {"up": up})
     if path.is_dir():
         raise EditError(f"input {path} is a folder: give a .bvh/.npy/.npz file inside it, or a dataset clip id")
+    if os.path.lexists(path) and not path.is_file():  # a device, pipe or broken link: a path, not a clip id
+        check_input_file(path)
     if path.is_file():
         raise EditError(f"input {path} is a {path.suffix or 'suffix-less'} file; edit reads .bvh, .npy (joints), .npz "
                         "(joints or SMPL parameters), or a dataset clip id")  # fmt: skip
@@ -223,6 +225,9 @@ def _npy_features(path: Path, module, start: int, frames: int | None, up_axis: s
             "not have; give a .bvh file or a dataset clip id"
         )
     joints = _load_joints(path)
+    if joints.dtype.kind != "f":
+        raise EditError(f"{path}: holds {joints.dtype}, expected floating-point joint positions in metres (float32 "
+                        "or float64)")  # fmt: skip
     skel = rep.skeleton
     if joints.ndim != 3 or joints.shape[1:] != (skel.num_joints, 3):
         raise EditError(

@@ -14,7 +14,11 @@ def check_motion(
 ) -> np.ndarray:
     """`joints` as float64 (N >= 1, J, 3), or ValueError naming `who`, the bad frames and the fix. `fps=None`:
     not checked (the caller has no frame rate)."""
-    joints = np.asarray(joints, dtype=np.float64)
+    raw = np.asarray(joints)
+    if raw.dtype.kind in "iubcUSV":  # whole numbers, flags, text: not positions ("NaN or Inf" would mislead)
+        raise ValueError(f"{who}: joints hold {raw.dtype}, expected floating-point positions in metres (float32 "
+                         "or float64)")  # fmt: skip
+    joints = raw.astype(np.float64)
     j = skeleton.num_joints
     if joints.ndim != 3 or joints.shape[1:] != (j, 3) or len(joints) == 0:
         raise ValueError(f"{who}: joints must have shape (frames >= 1, {j}, 3) for skeleton {skeleton.name!r}, got "

@@ -34,7 +34,10 @@ def generation_frames(module, seconds=None, *, frames: int | None = None, name: 
         frames, given = round(float(seconds) * fps), seconds
     else:
         given = frames
-    if isinstance(frames, bool) or not isinstance(frames, int | np.integer) or frames <= 0:
+        if isinstance(frames, bool) or not isinstance(frames, int | np.integer) or frames <= 0:
+            raise UsageError(f"frames={frames!r}: must be a whole number of frames, at least 1 (this model makes "
+                             f"{fps:g} a second; give seconds= for a length in seconds)")  # fmt: skip
+    if frames <= 0:
         raise UsageError(f"{name} must be positive (at least one frame, {1 / fps:g} s), got {given!r}")
     if frames > max_frames:
         raise UsageError(

@@ -11,6 +11,7 @@ from motiondiff.model_files.release import load_latent_release, load_release
 from motiondiff.model_files.resolve import RELEASE_SUFFIXES
 from motiondiff.runtime.checked_loading import CKPT_FIX, check_finite_state, check_same_shapes, reading
 from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.file_kinds import file_problem
 
 
 def load_model(path: str | Path, device: str = "cpu") -> MotionDiffusion:
@@ -39,8 +40,9 @@ def load_vae(path: str | Path, what: str = "VAE checkpoint", fix: str = VAE_FIX)
     from motiondiff.lit.vae import MotionVAEModule  # Lightning: only where a VAE loads
 
     path = Path(path)
-    if not path.is_file():
-        raise UsageError(f"{what} {path} not found; {fix}")
+    problem = file_problem(path)
+    if problem is not None:
+        raise UsageError(f"{what} {path} {problem}; {fix}")
     state = checkpoint_state(path, what, fix)
     with reading(path, what, fix):
         module = MotionVAEModule(**state["hyper_parameters"])

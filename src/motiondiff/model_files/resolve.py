@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.file_kinds import file_problem
 from motiondiff.runtime.paths import REPO_DIR, work_dir
 
 MODELS_DIR = REPO_DIR / "checkpoints" / "models"
@@ -61,6 +62,9 @@ def find_model(spec: str | Path, output_dir: str | Path | None = None, condition
         raise UsageError(f"checkpoint {path} is a folder, not a model file: pass checkpoint=<path to a .ckpt or "
                          ".safetensors file>, checkpoint=shipped, checkpoint=latest or checkpoint=best")  # fmt: skip
     if "/" in key or path.suffix:  # meant as a file
+        problem = file_problem(path, allow_empty=True)
+        if problem is not None and not problem.startswith("not found"):
+            raise UsageError(f"checkpoint {path} {problem}; pass checkpoint=<path to a .ckpt or .safetensors file>")
         raise UsageError(f"checkpoint {path} not found; pass checkpoint=<path to a .ckpt or .safetensors release>, "
                          f"checkpoint=shipped, checkpoint=latest, checkpoint=best or a released model's name "
                          f"({', '.join(released_names())})")  # fmt: skip

@@ -12,6 +12,7 @@ fix; sampling goes through the one generation chain (`motiondiff.lit.generation`
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -227,6 +228,12 @@ class MotionPipeline:
             joints = self.model.representation.decode_numpy(feats)
             return InputMotion(feats, joints, "generated", self.fps, (0, n), len(motion.features[0]),
                                captions=[motion.prompts[0]] if motion.prompts[0] else [])  # fmt: skip
+        if not isinstance(motion, str | os.PathLike):  # an array is not an id: printing it as one helps nobody
+            hint = (
+                ": save joints (frames, J, 3) with np.save and pass the .npy path" if hasattr(motion, "shape") else ""
+            )
+            raise UsageError(f"motion must be a .bvh/.npy/.npz path, a dataset clip id or a MotionOutput, got a "
+                             f"{type(motion).__name__}{hint}")  # fmt: skip
         return self._load(motion, up_axis, smpl_model)
 
     def _load(self, source, up_axis: str = "auto", smpl_model=None) -> InputMotion:

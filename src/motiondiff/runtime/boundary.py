@@ -122,6 +122,30 @@ def refuse_if_in_use(out: Path) -> None:
                          "(leave hydra.run.dir unset)")  # fmt: skip
 
 
+RUN_RECORDS = (".hydra", "results.json", "run.json")  # what marks a folder as an earlier run's
+
+
+def refuse_used_folder(run_dir: Path, ckpt_path: str | None = None) -> None:
+    """Refuse a run folder that holds an earlier run's records (checked before Hydra rewrites them): a second run
+    there would mix its files with the first's, and a training run would print a checkpoint path that still holds
+    the old model. Resuming a training run in its own folder (``ckpt_path`` inside it) is the one exception."""
+    run_dir = Path(run_dir)
+    if _worker_process() or not run_dir.is_dir():
+        return
+    remove_stale_runs(run_dir.parent)  # a killed run's folder is cleaned as its failure would have cleaned it
+    if not run_dir.is_dir():
+        return
+    records = [name for name in RUN_RECORDS if (run_dir / name).exists()]
+    if not records:
+        return
+    if ckpt_path and Path(ckpt_path).resolve().is_relative_to(run_dir.resolve()):
+        return
+    last = run_dir / "checkpoints" / "last.ckpt"
+    resume = f"; to go on training that run, pass ckpt_path={last}" if last.is_file() else ""
+    raise UsageError(f"{run_dir} holds an earlier run ({', '.join(records)}), which this run would overwrite: leave "
+                     f"hydra.run.dir unset for a fresh folder, or name a new one{resume}")  # fmt: skip
+
+
 def remove_stale_runs(parent: Path) -> None:
     """Run folders under ``parent`` left by killed runs (SIGKILL, power loss: their lock names a dead process) are
     cleaned as a failed run would have cleaned them: removed when the run created them and no checkpoint is in

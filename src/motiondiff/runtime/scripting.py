@@ -7,17 +7,26 @@ import difflib
 import os
 import re
 import secrets
+import shutil
 import sys
 from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from motiondiff.runtime.boundary import USER_ERRORS, guarded, refuse_if_in_use, run_folder, stop_on_sigterm  # noqa: F401  (USER_ERRORS re-exported)
+from motiondiff.runtime.boundary import (  # noqa: F401  (USER_ERRORS re-exported)
+    USER_ERRORS,
+    guarded,
+    refuse_if_in_use,
+    refuse_used_folder,
+    run_folder,
+    stop_on_sigterm,
+)
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.hardware import (
     fast_cpu_precision,  # torch: imported when a config asks, not to start a command
 )
 from motiondiff.runtime.paths import CONF_DIR, REPO_DIR, work_dir
+from motiondiff.runtime.settings import MAX_SWEEP_JOBS, MIN_FREE_BYTES
 
 # This process's part of its run folder's name (pid and a random token, fixed for the process): two runs started in
 # the same second never share a folder.
@@ -131,6 +140,8 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
     """Compose the config with the command line's overrides once before Hydra's run, so a misspelt key, a missing
     config group option or a syntax error is one ``error:`` line and exit code 2 (Hydra's own report is several
     lines and exit code 1), and no run folder is made. Sweeps (-m) and Hydra's flags are left to Hydra."""
+    if any(a in ("-m", "--multirun") for a in argv):
+        guarded(check_sweep_size)([a for a in argv if not a.startswith("-")])
     if any(a.startswith("-") for a in argv):
         return
     guarded(check_override_kinds)(config_name, argv)
@@ -161,6 +172,38 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
         return  # resolved by Hydra at run time only
     guarded(check_writable)(run_dir)
     guarded(refuse_if_in_use)(run_dir)  # before Hydra writes its config and log into another run's folder
+    guarded(refuse_used_folder)(run_dir, _selected(cfg, "ckpt_path"))  # nor into a finished run's
+
+
+def _selected(cfg: DictConfig, key: str) -> str | None:
+    try:
+        value = OmegaConf.select(cfg, key, default=None)
+    except Exception:  # noqa: BLE001 - an interpolation Hydra resolves only at run time
+        return None
+    return None if value is None else str(value)
+
+
+def check_sweep_size(overrides: list[str]) -> None:
+    """Refuse a multirun (-m) of more than MAX_SWEEP_JOBS jobs before Hydra lists them (``seed=range(0,1000000)``
+    would plan a million runs and start none for minutes). Counted from Hydra's own override parser."""
+    import itertools
+
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+    from hydra.errors import HydraException
+
+    try:
+        parsed = OverridesParser.create().parse_overrides(overrides)
+    except HydraException:
+        return  # Hydra reports its own syntax errors
+    jobs = 1
+    for override in parsed:
+        if override.is_sweep_override() and not override.is_interval_sweep():
+            values = sum(1 for _ in itertools.islice(override.sweep_iterator(), MAX_SWEEP_JOBS + 1))
+            jobs *= max(values, 1)
+            if jobs > MAX_SWEEP_JOBS:
+                raise UsageError(f"this sweep makes more than {MAX_SWEEP_JOBS} jobs ({override.input_line} alone "
+                                 f"gives {values if values <= MAX_SWEEP_JOBS else f'over {MAX_SWEEP_JOBS}'}): sweep "
+                                 "fewer values, or split it into several sweeps")  # fmt: skip
 
 
 # The commands whose configs are closed: a setting added with +key or removed with ~key is a mistake there (training
@@ -212,6 +255,11 @@ def check_writable(folder: Path) -> None:
     except OSError as err:
         raise UsageError(f"cannot make the run folder {folder} ({err.strerror} in {parent}): set a writable "
                          "paths.output_dir= or hydra.run.dir=") from None  # fmt: skip
+    free = shutil.disk_usage(parent).free
+    if free < MIN_FREE_BYTES:
+        raise UsageError(f"the disk of the run folder {folder} has {free // 1024} KiB free; a run needs at least "
+                         f"{MIN_FREE_BYTES >> 20} MiB: free some disk space, or set paths.output_dir= on another "
+                         "disk")  # fmt: skip
 
 
 def _override_error(err: Exception) -> str:

@@ -25,6 +25,8 @@ MAX_LONG_SECONDS = 600.0  # one long motion in all (12,000 frames at 20 fps)
 MAX_REPLICATIONS = 100  # evaluate.py (the protocol's 20; 100 for a fifth of their CI width)
 MAX_BATCH_SIZE = 4096  # motions generated or scored per batch
 MAX_PROMPTS_FILE_BYTES = 1 << 20  # a prompts file (1 MiB: over 10,000 prompts); larger ones are refused unread
+MAX_SWEEP_JOBS = 1000  # jobs of one Hydra multirun (-m): a typo such as range(0,1000000) is refused at once
+MIN_FREE_BYTES = 1 << 20  # free space a run folder's disk needs before Hydra writes its config and log there
 
 
 def _first(*values):

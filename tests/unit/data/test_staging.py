@@ -9,6 +9,7 @@ import pytest
 
 from motiondiff.data.preparing import staging
 from motiondiff.data.preparing.staging import recover, staged_folder
+from motiondiff.data.preparing.writer import PrepareError
 
 
 def dead_pid() -> int:
@@ -30,7 +31,7 @@ def test_the_new_folder_replaces_the_old_and_keeps_files_it_did_not_write(tmp_pa
     if not exchange:
         monkeypatch.setattr(staging, "_exchange", lambda a, b: False)
     out = old_dataset(tmp_path)
-    with staged_folder(out) as build:
+    with staged_folder(out, force=True) as build:
         assert build.parent == out.parent and build.name.startswith(".ds.building-")
         (build / "train.npz").write_text("new")
         assert (out / "train.npz").read_text() == "old", "the old dataset stays in place while the new one builds"
@@ -43,7 +44,7 @@ def test_the_new_folder_replaces_the_old_and_keeps_files_it_did_not_write(tmp_pa
 def test_a_failed_build_leaves_the_old_dataset_and_no_temporary_folder(tmp_path):
     out = old_dataset(tmp_path)
     with pytest.raises(KeyboardInterrupt):
-        with staged_folder(out) as build:
+        with staged_folder(out, force=True) as build:
             (build / "train.npz").write_text("half")
             raise KeyboardInterrupt
     assert (out / "train.npz").read_text() == "old"
@@ -62,3 +63,31 @@ def test_the_next_start_repairs_a_killed_swap_and_removes_dead_builds(tmp_path):
     recover(tmp_path / "ds")
     assert (tmp_path / "ds" / "meta.json").read_text() == "old"
     assert not aside.exists() and not dead_build.exists() and other.exists()
+
+
+def test_a_second_writer_is_refused_while_the_first_is_alive_and_a_dead_ones_lock_is_taken_over(tmp_path):
+    out = tmp_path / "ds"
+    lock = tmp_path / ".ds.lock"
+    with subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"]) as other:
+        try:
+            lock.write_text(str(other.pid))  # a live prepare holds the folder
+            with pytest.raises(PrepareError, match=f"another prepare \\(pid {other.pid}\\) is writing --out"):
+                with staged_folder(out):
+                    pass
+            assert not out.exists() and lock.read_text() == str(other.pid)
+        finally:
+            other.kill()
+    lock.write_text(str(dead_pid()))  # its prepare was killed
+    with staged_folder(out) as build:
+        (build / "meta.json").write_text("new")
+        assert lock.read_text() != ""
+    assert (out / "meta.json").read_text() == "new" and not lock.exists()
+
+
+def test_a_dataset_finished_by_another_run_meanwhile_is_not_replaced_without_force(tmp_path):
+    out = old_dataset(tmp_path)
+    with pytest.raises(PrepareError, match="already holds a prepared dataset; pass --force"):
+        with staged_folder(out):
+            pass
+    assert (out / "train.npz").read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ds"]

@@ -261,7 +261,7 @@ def build(src: str | Path, out: str | Path, counts: dict[str, int], seed: int = 
         report["splits"][split]["draws_refused"] = dict(refused.most_common())
     # the dataset config trains on the source's single clips and these sequences together: statistics of both
     mean, std = mean_std(np.concatenate([sources["train"].arrays["features"], arrays["train"]["features"]]))
-    with staged_folder(out) as build:  # a killed run leaves the old dataset or the new one, never a mixture
+    with staged_folder(out, force) as build:  # a killed run leaves the old dataset or the new one, never a mixture
         for split in SPLITS:
             save_split(build / f"{split}.npz", arrays[split], compact=True)
         report["npz_bytes"] = {s: (build / f"{s}.npz").stat().st_size for s in SPLITS}

@@ -239,7 +239,7 @@ def prepare_bvh(
     meta = {"captions": f"{note}{GENERATED_NOTE} (per-clip flags: captions_generated)", "joint_map_used": jm.to_json()}
     meta["license"] = copy_license(None, sources) or "unknown: no LICENSE file in the sources; check their terms"
     resolved = [Path(p).resolve() for p in sources]
-    with staged_folder(out) as build:  # a killed run leaves the old dataset or the new one, never a mixture
+    with staged_folder(out, opts.force) as build:  # a killed run leaves the old dataset or the new one, never a mixture
         report = process_and_write(clips, [], resolved, build, jm, saved, meta, opts.workers, opts.progress)
         copy_license(build, sources)
         atomic_write(build / "joint_map.json", lambda tmp: Path(tmp).write_text(json.dumps(jm.to_json(), indent=1)))

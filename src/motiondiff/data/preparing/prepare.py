@@ -63,7 +63,7 @@ def prepare_bandai(
     saved = {**opts.saved(), "caption_variants": caption_variants, "rare_to_train": rare_to_train,
              "held_out": [str(p) for p in held_out]}  # fmt: skip
     meta = {"captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}
-    with staged_folder(out) as build:  # a killed run leaves the old dataset or the new one, never a mixture
+    with staged_folder(out, opts.force) as build:  # a killed run leaves the old dataset or the new one, never a mixture
         report = process_and_write(clips, skipped, sources, build, joint_map, saved, meta, opts.workers, opts.progress)
         _write_license_and_readme(build, sources, report, out.name)
     return report

@@ -17,8 +17,10 @@ import errno
 import os
 import re
 import shutil
+import time
 from pathlib import Path
 
+from motiondiff.data.preparing.writer import PrepareError, check_output
 from motiondiff.runtime.processes import alive
 
 _AT_FDCWD, _RENAME_EXCHANGE = -100, 2
@@ -80,10 +82,46 @@ def swap_in(build: Path, out: Path) -> None:
 
 
 @contextlib.contextmanager
-def staged_folder(out: str | Path):
-    """Yield an empty temporary sibling of ``out`` to build into; swap it in when the block completes."""
+def _one_writer(out: Path):
+    """Hold ``out`` for this process (``.<name>.lock`` beside it, created exclusively): a second `prepare` into the
+    same folder is refused while the first is alive, instead of both reporting success."""
+    lock = out.parent / f".{out.name}.lock"
+    while True:
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            break
+        except FileExistsError:
+            try:
+                pid, young = int(lock.read_text() or 0), time.time() - lock.stat().st_mtime < 5
+            except (OSError, ValueError):
+                pid, young = 0, False
+            if (pid and pid != os.getpid() and alive(pid)) or (not pid and young):  # empty: being written now
+                raise PrepareError(f"another prepare (pid {pid or '?'}) is writing --out {out}: wait for it to "
+                                   "finish, or choose another --out") from None  # fmt: skip
+            lock.unlink(missing_ok=True)  # its process is gone
+    with os.fdopen(fd, "w") as f:
+        f.write(str(os.getpid()))
+    try:
+        yield
+    finally:
+        lock.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def staged_folder(out: str | Path, force: bool = False):
+    """Yield an empty temporary sibling of ``out`` to build into; swap it in when the block completes. One writer
+    at a time: ``out`` is locked, and checked again under the lock (`writer.check_output`: a dataset another run
+    finished meanwhile is not replaced without ``force``)."""
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
+    with _one_writer(out):
+        check_output(out, force)
+        with _building(out) as build:
+            yield build
+
+
+@contextlib.contextmanager
+def _building(out: Path):
     recover(out)
     build = out.parent / f".{out.name}.building-{os.getpid()}"
     shutil.rmtree(build, ignore_errors=True)

@@ -126,11 +126,27 @@ def _process(job: Job) -> ProcessedClip | str:
 
 
 # ---- the command -------------------------------------------------------------------------------------------------
+# what a prepared dataset folder holds: a user's files of these names are replaced only with --force
+DATASET_FILES = ("meta.json", "report.json", "README.md", "LICENSE", "joint_map.json", "Mean.npy", "Std.npy",
+                 *(f"{s}.npz" for s in SPLITS))  # fmt: skip
+NAME_MAX = 255  # bytes in one file or folder name
+
+
 def check_output(out: Path, force: bool) -> None:
+    """``out`` can take a new dataset: a folder (or a path to one) with names the file system takes, and without
+    a dataset or files a dataset would replace, unless ``force``."""
+    long = next((part for part in out.parts if len(os.fsencode(part)) > NAME_MAX), None)
+    if long is not None:
+        raise PrepareError(f"--out: the folder name {long[:24]}... has {len(os.fsencode(long))} bytes, more than the "
+                           f"file system's {NAME_MAX}; choose a shorter name")  # fmt: skip
     if out.exists() and not out.is_dir():
         raise PrepareError(f"--out {out} is a file, not a folder; choose a folder path (it is created if missing)")
     if out.is_dir() and (out / "meta.json").exists() and not force:
         raise PrepareError(f"--out {out} already holds a prepared dataset; pass --force to replace it")
+    clash = [name for name in DATASET_FILES if (out / name).exists()] if out.is_dir() and not force else []
+    if clash:
+        raise PrepareError(f"--out {out} holds {', '.join(clash)}, which the new dataset would replace: choose a new "
+                           "or empty folder, or pass --force to replace them")  # fmt: skip
     probe = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
     if not probe.is_dir():
         raise PrepareError(f"cannot create --out {out}: {probe} is a file; choose a folder path")
