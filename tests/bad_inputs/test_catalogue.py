@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fixtures.in_process import REPO, files_under, run_entry
+from fixtures.tiny_bvh import two_joint_bvh
 
 sys.path.insert(0, str(REPO / "tests" / "e2e"))
 from cli_helpers import write_kit_layout  # noqa: E402
@@ -27,28 +28,7 @@ from motiondiff.data.formats.bvh import BVHError, parse_bvh, read_bvh  # noqa: E
 from motiondiff.data.sources.humanml3d import load_official_split  # noqa: E402
 from motiondiff.runtime.errors import DatasetNotFoundError, RepresentationError  # noqa: E402
 
-BVH = """HIERARCHY
-ROOT Hips
-{
-  OFFSET 0 0 0
-  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
-  JOINT Spine
-  {
-    OFFSET 0 10 0
-    CHANNELS 3 Zrotation Xrotation Yrotation
-    End Site
-    {
-      OFFSET 0 10 0
-    }
-  }
-}
-MOTION
-Frames: 3
-Frame Time: 0.033333
-0 0 0 0 0 0 0 0 0
-0 0 0 0 0 0 0 0 0
-0 0 0 0 0 0 0 0 0
-"""
+BVH = two_joint_bvh()
 CLIP = "input=test:dataset-1_walk_active_001"
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 from cli_helpers import TINY, run_cli
 
-STEPS = 64  # four epochs of the embedded data at a global batch of 16 (251 clips / 16 = 16 steps each)
+STEPS = 32  # two epochs of the embedded data at a global batch of 16 (251 clips / 16 = 16 steps each)
 COMMON = [*TINY, f"trainer.max_steps={STEPS}", f"checkpoint_every={STEPS}", "optim.lr=2e-3",
           "trainer.check_val_every_n_epoch=1", "callbacks.evaluation.num_clips=8", "callbacks.evaluation.steps=5",
           "callbacks.evaluation.videos.prompts=[a person walks forward]",

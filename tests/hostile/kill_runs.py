@@ -1,6 +1,6 @@
 """Killing a command at random points (test_kill_*.py): each test first times one complete run, from its start to its
 first write on disk (S: the imports before it write nothing, so a kill there tests nothing) and to its end (T), then
-kills five runs, the k-th at a random moment in the k-th fifth of [S, T] (so the run folder's start, the work and the
+kills three runs, the k-th at a random moment in the k-th third of [S, T] (so the run folder's start, the work and the
 final writes are all hit), and checks what is on disk after every kill: the old complete result or the new one."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from hostile_cli import REPO, popen_cli
 
-KILLS = 5
+KILLS = 3
 BANDAI = REPO.parent / "shared" / "data" / "bandai-namco" / "bandai-ds1.zip"
 HYDRA_START = {".hydra", ".motiondiff.lock"}  # what a run has written before its first result
 

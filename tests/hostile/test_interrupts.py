@@ -31,25 +31,30 @@ def wait_for(predicate, timeout=120.0):
     return False
 
 
-def test_ctrl_c_while_writing_is_one_line_exit_130_and_leaves_no_folder(tmp_path):
-    """Ctrl-C once the first sample's files are written, while the other nineteen are still being written (their
-    videos take seconds each, so the moment is certain however loaded the machine is): nothing half-written stays."""
+def interrupt_while_writing(tmp_path, signum: int, code: int, needle: str, **popen) -> None:
+    """Send ``signum`` once the first sample's files are written, while the other nineteen are still being written
+    (their videos take seconds each, so the moment is certain however loaded the machine is): exit ``code``, one
+    line holding ``needle``, and nothing half-written, no folder and no lock left."""
     (tmp_path / "prompts.txt").write_text(PROMPTS)
     stderr = tmp_path / "stderr.txt"
     with stderr.open("w") as err_file:
         proc = popen_cli(tmp_path, "sample", "checkpoint=shipped", "prompts_file=prompts.txt", "length=1",
                          "export=[bvh,mp4]", env={"PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE, stderr=err_file,
-                         text=True, preexec_fn=_as_at_a_terminal)  # fmt: skip
+                         text=True, **popen)  # fmt: skip
         try:
             written = wait_for(lambda: any(p.suffix == ".bvh" for p in (tmp_path / "outputs").rglob("*")), 600)
-            assert written and proc.poll() is None, "no sample was written, or the run ended before the Ctrl-C"
-            proc.send_signal(signal.SIGINT)
+            assert written and proc.poll() is None, "no sample was written, or the run ended before the signal"
+            proc.send_signal(signum)
             out, _ = proc.communicate(timeout=120)
         finally:
             proc.kill()
     completed = subprocess.CompletedProcess(proc.args, proc.returncode, out, stderr.read_text())
-    assert_refused(completed, "interrupted", code=130)
-    assert files_under(tmp_path / "outputs") == [], "an interrupted run left its partial samples"
+    assert_refused(completed, needle, code=code)
+    assert files_under(tmp_path / "outputs") == [], "the stopped run left its partial samples or its lock"
+
+
+def test_ctrl_c_while_writing_is_one_line_exit_130_and_leaves_no_folder(tmp_path):
+    interrupt_while_writing(tmp_path, signal.SIGINT, 130, "interrupted", preexec_fn=_as_at_a_terminal)
 
 
 def test_a_second_run_into_a_folder_in_use_is_refused_and_changes_nothing(tmp_path):
@@ -73,24 +78,9 @@ def test_a_second_run_into_a_folder_in_use_is_refused_and_changes_nothing(tmp_pa
 
 
 def test_sigterm_while_writing_is_one_line_exit_143_and_leaves_no_folder(tmp_path):
-    """`kill <pid>` (a scheduler's time limit) at the same moment as the Ctrl-C above: exit 143, one line, no
-    folder and no lock left (Python's default would end at once and leave the run's lock)."""
-    (tmp_path / "prompts.txt").write_text(PROMPTS)
-    stderr = tmp_path / "stderr.txt"
-    with stderr.open("w") as err_file:
-        proc = popen_cli(tmp_path, "sample", "checkpoint=shipped", "prompts_file=prompts.txt", "length=1",
-                         "export=[bvh,mp4]", env={"PYTHONUNBUFFERED": "1"}, stdout=subprocess.PIPE, stderr=err_file,
-                         text=True)  # fmt: skip
-        try:
-            written = wait_for(lambda: any(p.suffix == ".bvh" for p in (tmp_path / "outputs").rglob("*")), 600)
-            assert written and proc.poll() is None, "no sample was written, or the run ended before the SIGTERM"
-            proc.send_signal(signal.SIGTERM)
-            out, _ = proc.communicate(timeout=120)
-        finally:
-            proc.kill()
-    completed = subprocess.CompletedProcess(proc.args, proc.returncode, out, stderr.read_text())
-    assert_refused(completed, "stopped by SIGTERM", code=143)
-    assert files_under(tmp_path / "outputs") == [], "a terminated run left its partial samples or its lock"
+    """`kill <pid>` (a scheduler's time limit) at the same moment as the Ctrl-C above (Python's default would end
+    at once and leave the run's lock)."""
+    interrupt_while_writing(tmp_path, signal.SIGTERM, 143, "stopped by SIGTERM")
 
 
 def test_sigterm_during_training_exits_143_and_keeps_the_checkpoints(tmp_path):

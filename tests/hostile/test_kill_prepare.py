@@ -1,4 +1,4 @@
-"""SIGKILL at five random points (while it writes) of `prepare --force` over an existing dataset: the old dataset or
+"""SIGKILL at three random points (while it writes) of `prepare --force` over an existing dataset: the old dataset or
 the new one."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""SIGKILL at five random points (while it writes) of sampling several prompts: every run folder is complete, or
+"""SIGKILL at three random points (while it writes) of sampling several prompts: every run folder is complete, or
 marked as a run in progress and removed by the next start."""
 
 from __future__ import annotations

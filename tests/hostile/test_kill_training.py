@@ -1,4 +1,4 @@
-"""SIGKILL at five random points (while it writes) of training (each run resuming the last): every checkpoint loads,
+"""SIGKILL at three random points (while it writes) of training (each run resuming the last): every checkpoint loads,
 half-written ones are removed by the next start, and training resumes."""
 
 from __future__ import annotations

@@ -101,3 +101,11 @@ def test_the_demo_checks_its_options_before_loading(tmp_path):
         check_args(_demo_args(seconds=-1))
     check_args(_demo_args(output_dir=str(tmp_path / "new" / "folder")))
     assert (tmp_path / "new" / "folder").is_dir()
+
+
+def test_prepare_refuses_an_over_long_out_name_in_one_line(tmp_path, capsys):
+    (tmp_path / "src").mkdir()
+    code = prepare_main(["bvh", "--src", str(tmp_path / "src"), "--out", str(tmp_path / ("d" * 300))])
+    errors = [line for line in capsys.readouterr().err.splitlines() if line.startswith("error:")]
+    assert code == 2 and len(errors) == 1 and "has 300 bytes, more than the file system's 255" in errors[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["src"]
