@@ -25,6 +25,20 @@ log = logging.getLogger(__name__)
 VIEWER_HEIGHT = 600  # px; the viewer page fills it (plot and play bar)
 
 
+class NamedSlider(gr.Slider):
+    """A slider whose out-of-range refusal names its field: Gradio's own says only "Value 1e9 is greater than
+    maximum value 6.0." (the page cannot send such a value; a client of the demo's API can)."""
+
+    def get_block_name(self) -> str:
+        return "slider"  # drawn by Gradio's own slider
+
+    def preprocess(self, payload: float) -> float:
+        try:
+            return super().preprocess(payload)
+        except gr.Error as err:
+            raise gr.Error(f"Please fix {self.label}: {err.message}") from None
+
+
 def viewer_iframe(page: Path, title: str) -> str:
     """The self-contained HTML viewer in an iframe (``srcdoc``: nothing is served or fetched)."""
     doc = html.escape(page.read_text(encoding="utf-8"), quote=True)
@@ -130,15 +144,15 @@ def build_demo(
                 weights = gr.Textbox(label="local action weights (GuidedMotion)", visible=first.kind == "guided",
                                      placeholder="one per action of the caption, e.g. 2, 0.5 (empty: 1 each)")  # fmt: skip
             with gr.Column(scale=2):
-                secs = gr.Slider(0.5, first.max_seconds, value=min(seconds, first.max_seconds), step=0.05,
+                secs = NamedSlider(0.5, first.max_seconds, value=min(seconds, first.max_seconds), step=0.05,
                                  label="seconds", info=f"up to {first.max_seconds:g} s")  # fmt: skip
-                guidance = gr.Slider(0.0, 15.0, value=first.default_guidance, step=0.1, label="guidance",
+                guidance = NamedSlider(0.0, 15.0, value=first.default_guidance, step=0.1, label="guidance",
                                      info="classifier-free guidance scale (the model's default at first)")  # fmt: skip
                 with gr.Row():
                     seed = gr.Number(0, precision=0, label="seed", minimum=0)
-                    count = gr.Slider(1, MAX_SAMPLES, value=1, step=1, label="samples")
+                    count = NamedSlider(1, MAX_SAMPLES, value=1, step=1, label="samples")
                 with gr.Accordion("advanced", open=False):
-                    n_steps = gr.Slider(1, 1000, value=steps, step=1, label="sampler steps (DDIM)", elem_id="steps")
+                    n_steps = NamedSlider(1, 1000, value=steps, step=1, label="sampler steps (DDIM)", elem_id="steps")
         button = gr.Button("Generate", variant="primary", elem_id="generate")
         last = gr.State(None)  # the motions on the page: what an edit starts from
         with gr.Accordion("edit body parts of sample 1", open=False):

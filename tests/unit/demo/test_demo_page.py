@@ -10,10 +10,15 @@ pytest.importorskip("gradio", reason="gradio is not installed: `pip install -e '
 
 
 @pytest.fixture(scope="module")
-def handlers(tmp_path_factory):
+def page_folder(tmp_path_factory):
+    return tmp_path_factory.mktemp("page")
+
+
+@pytest.fixture(scope="module")
+def handlers(page_folder):
     from motiondiff.demo import DemoModels, build_demo
 
-    demo = build_demo(DemoModels(), "action", seconds=1.0, steps=2, output_dir=tmp_path_factory.mktemp("page"))
+    demo = build_demo(DemoModels(), "action", seconds=1.0, steps=2, output_dir=page_folder)
     return {f.name: f.fn for f in demo.fns.values()}
 
 
@@ -69,3 +74,21 @@ def test_the_edit_regenerates_the_chosen_parts_and_keeps_the_rest(handlers):
     assert np.abs(after[:, arms] - before[:, arms]).max() > 1e-2
     status, same, *_ = handlers["on_edit"]("action", None, "", "walk", ["upper_body"], 2.0, 0, 2)
     assert status.startswith("**Please fix:** generate a motion first") and same is None
+
+
+def test_a_refused_request_leaves_no_request_folder(handlers, page_folder):
+    before = sorted(p.name for p in page_folder.iterdir())
+    status, *_ = handlers["on_generate"]("action", "", "fly", 1.0, 2.0, 0, 1, 2, "", progress=lambda *a, **k: None)
+    assert status.startswith("**Please fix:**")
+    assert sorted(p.name for p in page_folder.iterdir()) == before
+
+
+def test_an_out_of_range_slider_value_names_its_field():
+    import gradio as gr
+
+    from motiondiff.demo.app import NamedSlider
+
+    slider = NamedSlider(0.5, 6.0, value=2.0, label="seconds")
+    assert slider.get_block_name() == "slider" and slider.preprocess(2.0) == 2.0
+    with pytest.raises(gr.Error, match=r"Please fix seconds: Value 1000000000.0 is greater than maximum value 6.0"):
+        slider.preprocess(1e9)
