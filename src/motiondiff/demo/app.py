@@ -25,18 +25,21 @@ log = logging.getLogger(__name__)
 VIEWER_HEIGHT = 600  # px; the viewer page fills it (plot and play bar)
 
 
-class NamedSlider(gr.Slider):
-    """A slider whose out-of-range refusal names its field: Gradio's own says only "Value 1e9 is greater than
-    maximum value 6.0." (the page cannot send such a value; a client of the demo's API can)."""
+def named_slider(*args, **kwargs) -> gr.Slider:
+    """A `gr.Slider` whose out-of-range refusal names its field: Gradio's own says only "Value 1e9 is greater than
+    maximum value 6.0." (the page cannot send such a value; a client of the demo's API can). The method is wrapped
+    on the instance, not in a subclass: Gradio writes a .pyi stub beside the source of every Component subclass."""
+    slider = gr.Slider(*args, **kwargs)
+    plain = slider.preprocess
 
-    def get_block_name(self) -> str:
-        return "slider"  # drawn by Gradio's own slider
-
-    def preprocess(self, payload: float) -> float:
+    def preprocess(payload: float) -> float:
         try:
-            return super().preprocess(payload)
+            return plain(payload)
         except gr.Error as err:
-            raise gr.Error(f"Please fix {self.label}: {err.message}") from None
+            raise gr.Error(f"Please fix {slider.label}: {err.message}") from None
+
+    slider.preprocess = preprocess
+    return slider
 
 
 def viewer_iframe(page: Path, title: str) -> str:
@@ -144,15 +147,15 @@ def build_demo(
                 weights = gr.Textbox(label="local action weights (GuidedMotion)", visible=first.kind == "guided",
                                      placeholder="one per action of the caption, e.g. 2, 0.5 (empty: 1 each)")  # fmt: skip
             with gr.Column(scale=2):
-                secs = NamedSlider(0.5, first.max_seconds, value=min(seconds, first.max_seconds), step=0.05,
+                secs = named_slider(0.5, first.max_seconds, value=min(seconds, first.max_seconds), step=0.05,
                                  label="seconds", info=f"up to {first.max_seconds:g} s")  # fmt: skip
-                guidance = NamedSlider(0.0, 15.0, value=first.default_guidance, step=0.1, label="guidance",
+                guidance = named_slider(0.0, 15.0, value=first.default_guidance, step=0.1, label="guidance",
                                      info="classifier-free guidance scale (the model's default at first)")  # fmt: skip
                 with gr.Row():
                     seed = gr.Number(0, precision=0, label="seed", minimum=0)
-                    count = NamedSlider(1, MAX_SAMPLES, value=1, step=1, label="samples")
+                    count = named_slider(1, MAX_SAMPLES, value=1, step=1, label="samples")
                 with gr.Accordion("advanced", open=False):
-                    n_steps = NamedSlider(1, 1000, value=steps, step=1, label="sampler steps (DDIM)", elem_id="steps")
+                    n_steps = named_slider(1, 1000, value=steps, step=1, label="sampler steps (DDIM)", elem_id="steps")
         button = gr.Button("Generate", variant="primary", elem_id="generate")
         last = gr.State(None)  # the motions on the page: what an edit starts from
         with gr.Accordion("edit body parts of sample 1", open=False):

@@ -86,9 +86,9 @@ def test_a_refused_request_leaves_no_request_folder(handlers, page_folder):
 def test_an_out_of_range_slider_value_names_its_field():
     import gradio as gr
 
-    from motiondiff.demo.app import NamedSlider
+    from motiondiff.demo.app import named_slider
 
-    slider = NamedSlider(0.5, 6.0, value=2.0, label="seconds")
-    assert slider.get_block_name() == "slider" and slider.preprocess(2.0) == 2.0
+    slider = named_slider(0.5, 6.0, value=2.0, label="seconds")
+    assert slider.preprocess(2.0) == 2.0
     with pytest.raises(gr.Error, match=r"Please fix seconds: Value 1000000000.0 is greater than maximum value 6.0"):
         slider.preprocess(1e9)
