@@ -95,5 +95,9 @@ def test_sigterm_during_training_exits_143_and_keeps_the_checkpoints(tmp_path):
     finally:
         proc.kill()
     assert proc.returncode == 143, f"exit {proc.returncode}: {err[-500:]}"
-    assert "stopped by SIGTERM" in err and "Traceback" not in err
+    assert "Traceback" not in err
+    (line,) = [line for line in err.splitlines() if line.startswith("error: ")]
+    steps = sorted(int(p.stem[4:]) for p in (run_dir / "checkpoints").glob("step*.ckpt"))
+    assert line == (f"error: stopped by SIGTERM; its last checkpoint (step {steps[-1]}) is kept: resume with "
+                    f"ckpt_path={run_dir / 'checkpoints' / 'last.ckpt'}"), line  # fmt: skip
     assert any((run_dir / "checkpoints").glob("*.ckpt")) and not (run_dir / ".motiondiff.lock").exists()

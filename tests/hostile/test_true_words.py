@@ -62,3 +62,12 @@ def test_a_sweep_of_a_million_jobs_is_refused_before_any_job(tmp_path):
     proc = run_in_process(tmp_path, "sample", "-m", "checkpoint=shipped", "text=walk", "seed=range(0,1000000)")
     assert_refused(proc, f"more than {MAX_SWEEP_JOBS} jobs", "seed=range(0,1000000)")
     assert not (tmp_path / "outputs").exists() and not (tmp_path / "multirun").exists()
+
+
+def test_a_cuda_device_on_a_machine_without_one_is_one_usage_error():
+    import torch
+
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a CUDA device")
+    with pytest.raises(UsageError, match="device=cuda but this machine has no CUDA device"):
+        MotionPipeline.from_pretrained("text", device="cuda")

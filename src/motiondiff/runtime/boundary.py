@@ -78,19 +78,29 @@ def guarded(fn):
 SIGTERM_EXIT = 143  # 128 + SIGTERM, as a shell reports a process the signal ended
 
 
-def stop_on_sigterm() -> None:
+def stop_on_sigterm(out: Path | None = None) -> None:
     """Make SIGTERM (`kill`, a scheduler's time limit) end a command like Ctrl-C does: one line, exit code 143, and
-    the run folder cleaned by `run_folder` (a training run keeps its checkpoints). Without it Python dies at once and
-    leaves its lock; Lightning's own handler would end training with exit code 0. Main thread only."""
+    the run folder ``out`` cleaned by `run_folder` (a training run keeps its checkpoints, and the line says from
+    which step and how to resume). Without it Python dies at once and leaves its lock; Lightning's own handler would
+    end training with exit code 0. Main thread only."""
     if threading.current_thread() is not threading.main_thread():
         return
 
     def stop(signum, frame):
-        print("error: stopped by SIGTERM (a training run keeps its checkpoints: resume with ckpt_path=<its run "
-              "folder>/checkpoints/last.ckpt)", file=sys.stderr)  # fmt: skip
+        print(f"error: stopped by SIGTERM{_resume_hint(out)}", file=sys.stderr)
         raise SystemExit(SIGTERM_EXIT)
 
     signal.signal(signal.SIGTERM, stop)
+
+
+def _resume_hint(out: Path | None) -> str:
+    """Where a stopped training run can go on from: its last checkpoint and that checkpoint's step."""
+    last = Path(out) / "checkpoints" / "last.ckpt" if out is not None else None
+    if last is None or not last.is_file():
+        return "; nothing of this run is kept"
+    steps = [int(p.stem[4:]) for p in last.parent.glob("step*.ckpt") if p.stem[4:].isdigit()]
+    at = f" (step {max(steps)})" if steps else ""
+    return f"; its last checkpoint{at} is kept: resume with ckpt_path={last}"
 
 
 def _fresh(out: Path, job_name: str) -> bool:

@@ -126,9 +126,8 @@ def run_hydra(config_name: str, run) -> None:
     def task(cfg: DictConfig):
         from hydra.core.hydra_config import HydraConfig
 
-        stop_on_sigterm()
-
         hydra_cfg = HydraConfig.get()
+        stop_on_sigterm(Path(hydra_cfg.runtime.output_dir))
         with run_folder(Path(hydra_cfg.runtime.output_dir), hydra_cfg.job.name):
             literal_user_text(cfg)
             return run(cfg)
