@@ -115,7 +115,11 @@ def test_checks(
         out[f"fid_{split}_vs_train"] = M.frechet_distance(*stats["test"], *stats["train"])
         out[f"fid_{split}_vs_reversed"] = M.frechet_distance(*stats["test"], *stats["reversed"])
     if evaluators.action is not None:
-        out["accuracy"] = float((real_test["action_logits"].argmax(-1) == test.actions).mean())
+        predicted = real_test["action_logits"].argmax(-1)
+        out["accuracy"] = float((predicted == test.actions).mean())
+        # mean per-action recall over the actions the split holds: the rare actions weigh as much as the common ones
+        out["balanced_accuracy"] = float(np.mean([(predicted[test.actions == a] == a).mean()
+                                                  for a in np.unique(test.actions)]))  # fmt: skip
         stats = [M.gaussian_statistics(e["action_features"]) for e in (real_test, real_train)]
         out[f"action_fid_{split}_vs_train"] = M.frechet_distance(*stats[0], *stats[1])
     return out
