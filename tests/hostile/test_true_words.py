@@ -60,7 +60,7 @@ def test_api_words_name_what_was_given(pipe):
 
 def test_a_sweep_of_a_million_jobs_is_refused_before_any_job(tmp_path):
     proc = run_in_process(tmp_path, "sample", "-m", "checkpoint=shipped", "text=walk", "seed=range(0,1000000)")
-    assert_refused(proc, f"more than {MAX_SWEEP_JOBS} jobs", "seed=range(0,1000000)")
+    assert_refused(proc, f"more than {MAX_SWEEP_JOBS} jobs", f"seed=range(0,1000000): over {MAX_SWEEP_JOBS}")
     assert not (tmp_path / "outputs").exists() and not (tmp_path / "multirun").exists()
 
 

@@ -4,6 +4,8 @@ config resolvers, offline project-local tool caches, one-line user errors, key=v
 from __future__ import annotations
 
 import difflib
+import itertools
+import math
 import os
 import re
 import secrets
@@ -185,8 +187,6 @@ def _selected(cfg: DictConfig, key: str) -> str | None:
 def check_sweep_size(overrides: list[str]) -> None:
     """Refuse a multirun (-m) of more than MAX_SWEEP_JOBS jobs before Hydra lists them (``seed=range(0,1000000)``
     would plan a million runs and start none for minutes). Counted from Hydra's own override parser."""
-    import itertools
-
     from hydra.core.override_parser.overrides_parser import OverridesParser
     from hydra.errors import HydraException
 
@@ -194,15 +194,12 @@ def check_sweep_size(overrides: list[str]) -> None:
         parsed = OverridesParser.create().parse_overrides(overrides)
     except HydraException:
         return  # Hydra reports its own syntax errors
-    jobs = 1
-    for override in parsed:
-        if override.is_sweep_override() and not override.is_interval_sweep():
-            values = sum(1 for _ in itertools.islice(override.sweep_iterator(), MAX_SWEEP_JOBS + 1))
-            jobs *= max(values, 1)
-            if jobs > MAX_SWEEP_JOBS:
-                raise UsageError(f"this sweep makes more than {MAX_SWEEP_JOBS} jobs ({override.input_line} alone "
-                                 f"gives {values if values <= MAX_SWEEP_JOBS else f'over {MAX_SWEEP_JOBS}'}): sweep "
-                                 "fewer values, or split it into several sweeps")  # fmt: skip
+    counts = [(o.input_line, sum(1 for _ in itertools.islice(o.sweep_iterator(), MAX_SWEEP_JOBS + 1)))
+              for o in parsed if o.is_sweep_override() and not o.is_interval_sweep()]  # fmt: skip
+    if math.prod(max(n, 1) for _, n in counts) > MAX_SWEEP_JOBS:
+        each = ", ".join(f"{line}: {n if n <= MAX_SWEEP_JOBS else f'over {MAX_SWEEP_JOBS}'}" for line, n in counts)
+        raise UsageError(f"this sweep makes more than {MAX_SWEEP_JOBS} jobs (values per setting: {each}): sweep "
+                         "fewer values, or split it into several sweeps")  # fmt: skip
 
 
 # The commands whose configs are closed: a setting added with +key or removed with ~key is a mistake there (training
