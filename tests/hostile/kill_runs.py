@@ -17,6 +17,9 @@ from hostile_cli import REPO, popen_cli
 
 KILLS = 3
 BANDAI = REPO.parent / "shared" / "data" / "bandai-namco" / "bandai-ds1.zip"
+# a small, quick `prepare` of the real data (one clip per group, 40 frames): the commands these tests stop or race
+PREPARE = ("bandai", "--src", str(BANDAI), "--per-group", "1", "--max-frames", "40", "--compact", "--workers", "1",
+           "--caption-variants", "0", "--rare-to-train", "0")  # fmt: skip
 HYDRA_START = {".hydra", ".motiondiff.lock"}  # what a run has written before its first result
 
 

@@ -7,7 +7,9 @@ import signal
 import subprocess
 import time
 
+import pytest
 from hostile_cli import assert_refused, files_under, popen_cli, run_in_process
+from kill_runs import BANDAI, PREPARE
 
 PROMPTS = "".join(f"a person walks forward then turns {k} times\n" for k in range(20))
 
@@ -101,3 +103,22 @@ def test_sigterm_during_training_exits_143_and_keeps_the_checkpoints(tmp_path):
     assert line == (f"error: stopped by SIGTERM; its last checkpoint (step {steps[-1]}) is kept: resume with "
                     f"ckpt_path={run_dir / 'checkpoints' / 'last.ckpt'}"), line  # fmt: skip
     assert any((run_dir / "checkpoints").glob("*.ckpt")) and not (run_dir / ".motiondiff.lock").exists()
+
+
+@pytest.mark.skipif(not BANDAI.is_file(), reason=f"needs the Bandai Namco data at {BANDAI}")
+@pytest.mark.parametrize(("signum", "code", "needle"), [(signal.SIGINT, 130, "interrupted (Ctrl-C)"),
+                                                        (signal.SIGTERM, 143, "stopped by SIGTERM")], ids=["ctrl_c", "sigterm"])  # fmt: skip
+def test_prepare_stopped_while_it_builds_leaves_no_build_folder_or_lock(tmp_path, signum, code, needle):
+    out = tmp_path / "data" / "ds"
+    proc = popen_cli(tmp_path, "prepare", *PREPARE, "--out", str(out), stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True, preexec_fn=_as_at_a_terminal)  # fmt: skip
+    try:
+        building = lambda: out.parent.is_dir() and any(out.parent.glob(".ds.building-*"))  # noqa: E731
+        assert wait_for(building, 300) and proc.poll() is None, "prepare ended before it was stopped"
+        proc.send_signal(signum)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    completed = subprocess.CompletedProcess(proc.args, proc.returncode, stdout, stderr)
+    assert_refused(completed, needle, "the output folder is as it was before", code=code)
+    assert sorted(p.name for p in out.parent.iterdir()) == [], "a build folder, a lock or a half dataset was left"

@@ -8,10 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from kill_runs import BANDAI, kill_points, killed, timed
-
-PREPARE = ("bandai", "--src", str(BANDAI), "--per-group", "1", "--max-frames", "40", "--compact", "--workers", "1",
-           "--caption-variants", "0", "--rare-to-train", "0")  # fmt: skip
+from kill_runs import BANDAI, PREPARE, kill_points, killed, timed
 
 
 def dataset_fingerprint(out: Path) -> str:

@@ -11,10 +11,8 @@ from pathlib import Path
 
 import pytest
 from hostile_cli import assert_refused, popen_cli, run_in_process
-from kill_runs import BANDAI
+from kill_runs import BANDAI, PREPARE
 
-PREPARE = ("bandai", "--src", str(BANDAI), "--per-group", "1", "--max-frames", "40", "--compact", "--workers", "1",
-           "--caption-variants", "0", "--rare-to-train", "0")  # fmt: skip
 needs_bandai = pytest.mark.skipif(not BANDAI.is_file(), reason=f"needs the Bandai Namco data at {BANDAI}")
 
 

@@ -62,6 +62,9 @@ def guarded(fn):
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
+        except Stopped as stop:  # reported here, after the run folder and any progress bar are closed
+            print(f"error: {stop.line}", file=sys.stderr)
+            sys.exit(SIGTERM_EXIT)
         except KeyboardInterrupt:
             print("error: interrupted (Ctrl-C)", file=sys.stderr)
             sys.exit(130)
@@ -78,19 +81,29 @@ def guarded(fn):
 SIGTERM_EXIT = 143  # 128 + SIGTERM, as a shell reports a process the signal ended
 
 
-def stop_on_sigterm(out: Path | None = None) -> None:
+class Stopped(SystemExit):
+    """SIGTERM, raised by `stop_on_sigterm`'s handler and reported by the command's boundary with its one line (by
+    then the run folder is cleaned and progress bars have finished their lines)."""
+
+    def __init__(self, line: str):
+        super().__init__(SIGTERM_EXIT)
+        self.line = line
+
+
+def stop_on_sigterm(out: Path | None = None, kept: str | None = None):
     """Make SIGTERM (`kill`, a scheduler's time limit) end a command like Ctrl-C does: one line, exit code 143, and
     the run folder ``out`` cleaned by `run_folder` (a training run keeps its checkpoints, and the line says from
     which step and how to resume). Without it Python dies at once and leaves its lock; Lightning's own handler would
-    end training with exit code 0. Main thread only."""
+    end training with exit code 0. ``kept``: what the line says is left instead (a command without a run folder).
+    Main thread only. Returns the handler it replaced (None where it installed nothing), for a caller that restores
+    it (a command called in-process)."""
     if threading.current_thread() is not threading.main_thread():
-        return
+        return None
 
     def stop(signum, frame):
-        print(f"error: stopped by SIGTERM{_resume_hint(out)}", file=sys.stderr)
-        raise SystemExit(SIGTERM_EXIT)
+        raise Stopped(f"stopped by SIGTERM{_resume_hint(out) if kept is None else kept}")
 
-    signal.signal(signal.SIGTERM, stop)
+    return signal.signal(signal.SIGTERM, stop)
 
 
 def _resume_hint(out: Path | None) -> str:

@@ -13,6 +13,7 @@ the previous dataset or the new one, never a mixture of half-written files.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from pathlib import Path
 
@@ -31,7 +32,7 @@ from motiondiff.data.preparing.writer import (  # noqa: F401  (PrepareError, che
     process_and_write,
 )
 from motiondiff.data.sources import bandai
-from motiondiff.runtime.boundary import error_line
+from motiondiff.runtime.boundary import SIGTERM_EXIT, Stopped, error_line, stop_on_sigterm
 
 
 def prepare_bandai(
@@ -130,8 +131,20 @@ def add_common_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="replace a prepared dataset already in --out")
 
 
+UNCHANGED = "the output folder is as it was before (prepared datasets are swapped in whole)"
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    previous = stop_on_sigterm(kept=f"; {UNCHANGED}")  # a scheduler's kill ends like Ctrl-C: exit 143, data kept
+    try:
+        return _prepare(args)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _prepare(args) -> int:
     common = dict(per_group=args.per_group, max_frames=args.max_frames, compact=args.compact, seed=args.seed,
                   workers=args.workers, force=args.force)  # fmt: skip
     try:
@@ -147,9 +160,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("error: interrupted (Ctrl-C); the output folder is as it was before (prepared datasets are swapped "
-              "in whole)", file=sys.stderr)  # fmt: skip
+        print(f"error: interrupted (Ctrl-C); {UNCHANGED}", file=sys.stderr)
         return 130
+    except Stopped as stop:  # SIGTERM (stop_on_sigterm), reported once the progress bar has closed
+        print(f"error: {stop.line}", file=sys.stderr)
+        return SIGTERM_EXIT
     except Exception as err:  # noqa: BLE001 - expected failures (disk, permissions, text) as one line; bugs re-raised
         line = error_line(err)
         if line is None:

@@ -246,15 +246,21 @@ Rebuilt with (from the folder holding the zips; in a motiondiff checkout `make d
 
 def _run(jobs: list[Job], joint_map: JointMap, workers: int | None, progress: bool) -> list:
     workers = workers if workers is not None else min(4, os.cpu_count() or 1)
-    bar = dict(total=len(jobs), desc="prepare", unit="clip", disable=not progress)
-    if workers <= 1:
-        _init_worker(joint_map)
-        try:
-            return [_process(j) for j in tqdm(jobs, **bar)]
-        finally:
-            _SOURCES.clear()  # no zip stays open in this process (a later pool would fork it)
-    with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(joint_map,)) as pool:
-        return list(tqdm(pool.map(_process, jobs, chunksize=8), **bar))
+    # the bar is closed however the work ends (Ctrl-C, SIGTERM): its line is finished before any error line
+    with tqdm(total=len(jobs), desc="prepare", unit="clip", disable=not progress) as bar:
+        if workers <= 1:
+            _init_worker(joint_map)
+            try:
+                return [_tick(bar, _process(j)) for j in jobs]
+            finally:
+                _SOURCES.clear()  # no zip stays open in this process (a later pool would fork it)
+        with ProcessPoolExecutor(workers, initializer=_init_worker, initargs=(joint_map,)) as pool:
+            return [_tick(bar, r) for r in pool.map(_process, jobs, chunksize=8)]
+
+
+def _tick(bar, result):
+    bar.update()
+    return result
 
 
 def _same_skeleton(kept, skipped):
