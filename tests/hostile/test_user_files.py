@@ -89,3 +89,19 @@ def test_resuming_a_training_run_in_its_own_folder_is_not_refused_as_a_used_fold
     line = assert_refused(proc, "ckpt_path=")  # the fake checkpoint is refused, by what it holds, not by the folder
     assert "holds an earlier run" not in line
     assert (run_dir / "checkpoints" / "last.ckpt").read_bytes() == b"the earlier run's model"
+
+
+def test_saving_into_a_folder_of_an_earlier_save_is_refused_unless_asked(tmp_path):
+    from motiondiff.pipelines import MotionPipeline
+    from motiondiff.runtime.errors import UsageError
+
+    out = MotionPipeline.from_pretrained("text")("a person walks forward", seconds=1, steps=2)
+    folder = tmp_path / "walks"
+    out.save(folder, formats=["bvh"])
+    (folder / "my_notes.txt").write_text("mine")
+    before = snapshot(folder)
+    with pytest.raises(UsageError, match="already holds a_person_walks_forward_00.bvh, .* pass overwrite=True"):
+        out.save(folder, formats=["bvh"])
+    assert snapshot(folder) == before
+    out.save(folder, formats=["bvh"], overwrite=True)
+    assert (folder / "my_notes.txt").read_text() == "mine"

@@ -75,6 +75,7 @@ class MotionOutput:
         smpl_model: str | Path | None = None,
         body=None,
         summary: dict | None = None,
+        overwrite: bool = False,
     ) -> list[dict]:
         """Write each motion's joints and features (.npy; the joints before smoothing or clean-up as *_joints_raw.npy)
         and the ``formats`` (bvh, mp4, gif, html, smpl) to ``folder``, with results.json: ``summary``, ``info`` and
@@ -82,7 +83,9 @@ class MotionOutput:
         before and after smoothing, what each clean-up did). The folder is created if needed; formats the skeleton
         cannot take (smpl off SMPL-22/24) are refused before anything is written. ``rig_names``: bone names of the
         bvh/fbx/glb files (smpl or mixamo; None: the skeleton's). ``render="mesh"`` with ``smpl_model=`` (the user's
-        SMPL body model .npz; or an already loaded ``body``) makes the mp4/gif videos show that body's mesh."""
+        SMPL body model .npz; or an already loaded ``body``) makes the mp4/gif videos show that body's mesh. A folder
+        that holds an earlier save (its results.json) or files of these motions' names is refused unless
+        ``overwrite``: nothing already there is replaced without asking."""
         formats = parse_formats(list(formats) if not isinstance(formats, str) else formats)
         body = body if body is not None else render_body(render, smpl_model)
         check_formats_for(formats, self.representation.skeleton, rig_names, body)
@@ -91,6 +94,8 @@ class MotionOutput:
         long = self.info.get("long_motion")  # one motion through several prompts: long_<prompts joined by "then">_<k>
         names = [" then ".join(str(s["label"]) for s in long["segments"])] * len(self) if long else self.prompts
         stems = motion_stems(names, "long_" if long else "")  # <prompt>_<k>, as the commands
+        if not overwrite:
+            _refuse_earlier_files(folder, stems)
         title = [(s["start"], str(s["label"])) for s in long["segments"]] if long else None
         if self.edit is not None:
             rows = save_edits(folder, self, formats, rig_names)
@@ -216,6 +221,16 @@ class MotionOutput:
     def _changed(self, i: int) -> np.ndarray | None:
         """The joints when they are not the features decoded as they are (smoothed or edited after decoding)."""
         return self.joints[i] if self.info.get("joints_changed") else None
+
+
+def _refuse_earlier_files(folder: Path, stems: list[str]) -> None:
+    """Refuse a folder holding an earlier save (results.json) or a file named like one of ``stems``' files."""
+    taken = sorted(p.name for p in folder.iterdir()
+                   if p.name == "results.json" or any(p.name.startswith((f"{s}_", f"{s}.")) for s in stems))  # fmt: skip
+    if taken:
+        shown = ", ".join(taken[:3]) + (f" and {len(taken) - 3} more" if len(taken) > 3 else "")
+        raise UsageError(f"{folder} already holds {shown}: save into a new folder, or pass overwrite=True to "
+                         "replace them")  # fmt: skip
 
 
 def _output_folder(folder) -> Path:
