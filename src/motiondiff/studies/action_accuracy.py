@@ -93,7 +93,8 @@ def main(argv: list[str]) -> None:
         raise SystemExit(f"{ckpt} is a {module.condition_kind} model; descriptions are for text models")
     module.prompt_mapping = load_prompt_mapping(ckpt, cfg.prompt_mapping)
     dataset = module.hparams.get("dataset") or "bandai_mini"
-    evaluators = Evaluators.load(REPO_DIR / "checkpoints" / "evaluators" / dataset, module.hparams.num_joints)
+    evaluator_dir = Path(cfg.evaluators or REPO_DIR / "checkpoints" / "evaluators" / dataset)
+    evaluators = Evaluators.load(evaluator_dir, module.hparams.num_joints)
     evaluators.for_module(module)
     items = load_descriptions(cfg.captions)
     sampling = sampling_args(cfg)
@@ -108,7 +109,7 @@ def main(argv: list[str]) -> None:
     accuracy, rows = summarise(result)
     out = Path(cfg.out or outputs / "action_accuracy" / time.strftime("%Y-%m-%d_%H-%M-%S"))
     out.mkdir(parents=True, exist_ok=True)
-    notes = [f"checkpoint: {ckpt}", f"descriptions: {cfg.captions} ({len(items)}), "
+    notes = [f"checkpoint: {ckpt}", f"classifier: {evaluator_dir}", f"descriptions: {cfg.captions} ({len(items)}), "
              f"{n} samples each, seed {seed}; sampler {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
              f"guidance {sampling['guidance']:g}, prompt mapping {cfg.prompt_mapping}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}; "
              f"{time.perf_counter() - start:.0f} s",
