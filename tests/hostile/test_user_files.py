@@ -105,3 +105,15 @@ def test_saving_into_a_folder_of_an_earlier_save_is_refused_unless_asked(tmp_pat
     assert snapshot(folder) == before
     out.save(folder, formats=["bvh"], overwrite=True)
     assert (folder / "my_notes.txt").read_text() == "mine"
+
+
+def test_a_run_refused_after_hydra_started_leaves_no_folder_at_all(tmp_path):
+    """`length=abc` is refused by the command's own checks, after Hydra made the run folder and its parents: the
+    folder goes, and so do the parents this run made (`outputs/sample/`), not only the files."""
+    proc = run_in_process(tmp_path, "sample", "checkpoint=shipped", "text=walk", "length=abc")
+    assert_refused(proc, "length='abc'")
+    assert not (tmp_path / "outputs").exists(), sorted(str(p) for p in (tmp_path / "outputs").rglob("*"))
+    (tmp_path / "outputs" / "sample").mkdir(parents=True)
+    (tmp_path / "outputs" / "sample" / "mine").mkdir()  # a folder that was there before stays
+    assert_refused(run_in_process(tmp_path, "sample", "checkpoint=shipped", "text=walk", "length=abc"), "length")
+    assert sorted(p.name for p in (tmp_path / "outputs" / "sample").iterdir()) == ["mine"]

@@ -238,3 +238,25 @@ def _remove_failed(out: Path, fresh: bool, quiet: bool = False) -> None:
             print(f"note: the failed run's checkpoints are kept in {out}", file=sys.stderr)
     elif fresh:
         shutil.rmtree(out, ignore_errors=True)
+        if not quiet:
+            _remove_new_parents(out)
+
+
+# The folders above this process's run folder that did not exist before it started (`note_new_parents`, called
+# before Hydra makes them): a refused or failed run takes them away again when they are left empty.
+_NEW_PARENTS: list[Path] = []
+
+
+def note_new_parents(run_dir: Path | None) -> None:
+    """Note which folders above ``run_dir`` do not exist yet (None: none, as for a sweep's runs)."""
+    _NEW_PARENTS[:] = [p for p in Path(run_dir).absolute().parents if not p.exists()] if run_dir else []
+
+
+def _remove_new_parents(out: Path) -> None:
+    for parent in _NEW_PARENTS:  # deepest first; one that is not empty (another run's) stops the walk
+        if parent not in Path(out).absolute().parents:
+            break
+        try:
+            parent.rmdir()
+        except OSError:
+            break

@@ -18,6 +18,7 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 from motiondiff.runtime.boundary import (  # noqa: F401  (USER_ERRORS re-exported)
     USER_ERRORS,
     guarded,
+    note_new_parents,
     refuse_if_in_use,
     refuse_used_folder,
     run_folder,
@@ -141,6 +142,7 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
     """Compose the config with the command line's overrides once before Hydra's run, so a misspelt key, a missing
     config group option or a syntax error is one ``error:`` line and exit code 2 (Hydra's own report is several
     lines and exit code 1), and no run folder is made. Sweeps (-m) and Hydra's flags are left to Hydra."""
+    note_new_parents(None)
     if any(a in ("-m", "--multirun") for a in argv):
         guarded(check_sweep_size)([a for a in argv if not a.startswith("-")])
     if any(a.startswith("-") for a in argv):
@@ -172,6 +174,7 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
             sys.exit(2)
         return  # resolved by Hydra at run time only
     guarded(check_writable)(run_dir)
+    note_new_parents(run_dir)  # what a failed run takes away again, besides its own folder
     guarded(refuse_if_in_use)(run_dir)  # before Hydra writes its config and log into another run's folder
     guarded(refuse_used_folder)(run_dir, _selected(cfg, "ckpt_path"))  # nor into a finished run's
 
