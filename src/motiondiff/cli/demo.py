@@ -11,6 +11,7 @@ needs internet and is off by default).
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import sys
 from pathlib import Path
 
@@ -65,6 +66,10 @@ def _yes(value: str) -> bool:
 @user_errors
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(sys.argv[1:] if argv is None else argv)
+    if importlib.util.find_spec("gradio") is None:  # an install without the [demo] extra
+        print("error: the web demo needs Gradio, which this install lacks: pip install 'motiondiff[demo]' (from a "
+              "checkout: pip install -e '.[demo]')", file=sys.stderr)  # fmt: skip
+        sys.exit(2)
     check_args(args)  # before the models load (seconds of CPU)
     quiet_tool_caches()
 

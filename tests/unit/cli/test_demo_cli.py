@@ -25,3 +25,14 @@ def test_a_missing_guided_checkpoint_is_one_error_line(tmp_path, capsys):
     assert exit_.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("error: no GuidedMotion checkpoint") and "Traceback" not in err
+
+
+def test_an_install_without_gradio_names_the_extra_to_install(monkeypatch, capsys):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "gradio" else real(name, *a))
+    with pytest.raises(SystemExit) as exit_:
+        main([])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and err.count("error:") == 1 and "pip install 'motiondiff[demo]'" in err
