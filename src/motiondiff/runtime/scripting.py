@@ -24,6 +24,7 @@ from motiondiff.runtime.boundary import (  # noqa: F401  (USER_ERRORS re-exporte
     run_folder,
     stop_on_sigterm,
 )
+from motiondiff.runtime.command_help import command_help
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.hardware import (
     fast_cpu_precision,  # torch: imported when a config asks, not to start a command
@@ -118,6 +119,9 @@ def run_hydra(config_name: str, run) -> None:
     sys.argv), after the resolvers and tool caches are set; user errors become one line and exit code 2."""
     import hydra
 
+    if any(a in ("--help", "-h") for a in sys.argv[1:]):  # the settings explained (Hydra's: --hydra-help)
+        print(command_help(config_name))
+        return
     register_resolvers()
     quiet_tool_caches()
     if not any(a.startswith("hydra.job.name=") for a in sys.argv[1:]):  # log files named after the command
@@ -264,6 +268,11 @@ def check_writable(folder: Path) -> None:
 def _override_error(err: Exception) -> str:
     """Hydra's several-line composition error as one line that names the setting and what is allowed."""
     text = str(err)
+    ambiguous = re.match(r"Ambiguous value for argument '([^'=]+)=([^']*)'", text)
+    if ambiguous:  # key=a,b outside a sweep
+        key, value = ambiguous.groups()
+        return (f"{key}={value} has commas: write a list as '{key}=[{value}]', quote text as \"{key}='{value}'\", or "
+                "sweep the values with -m")  # fmt: skip
     unknown = re.match(r"Could not override '([^']+)'", text)
     if unknown and "not in struct" in f"{text} {err.__cause__}" or unknown and "To append" in text:
         return f"unknown setting {unknown.group(1)!r}: check its spelling (`--cfg job` lists the settings)"
