@@ -22,8 +22,9 @@ pytestmark = pytest.mark.skipif(
 @pytest.mark.slow
 def test_best_fid_checkpoint_is_the_lowest_logged_fid(tmp_path):
     # 4 training steps per epoch on the embedded data; evaluation after every epoch, 5 evaluations in all.
-    run_cli("train.py", *TINY, "trainer.max_steps=20", "trainer.check_val_every_n_epoch=1", "checkpoint_every=100",
-            "optim.lr=2e-3", *FAST_EVAL, env_dir=tmp_path)  # fmt: skip
+    proc = run_cli("train.py", *TINY, "trainer.max_steps=20", "trainer.check_val_every_n_epoch=1",
+                   "checkpoint_every=100", "optim.lr=2e-3", *FAST_EVAL, env_dir=tmp_path)  # fmt: skip
+    assert "evaluation at step 4: " in proc.stderr, "the in-training evaluation shows no progress"  # its tqdm bar
     run = next((tmp_path / "outputs").glob("train/*"))
     rows = list(csv.DictReader(open(next(run.glob("csv/version_*/metrics.csv")))))
     fids = {int(r["step"]): float(r["val/fid"]) for r in rows if r.get("val/fid")}

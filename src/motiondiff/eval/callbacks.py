@@ -27,6 +27,7 @@ from pathlib import Path
 import lightning as L
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from motiondiff.eval.protocol import EvalClips, Evaluators, action_accuracy, generate, replication_metrics
 from motiondiff.eval.sample_videos import SampleVideos
@@ -123,7 +124,20 @@ class GenerationEvaluation(L.Callback):
         conditions = {"text": captions, "action": list(clips.actions)}.get(kind, [None] * len(clips))
         guidance = pl_module.default_guidance if self.guidance is None else self.guidance
         generator = torch.Generator(device=pl_module.device).manual_seed(self.seed)
-        feats = generate(pl_module, conditions, clips.lengths, self.batch_size, generator,
+        labelled_too = self.action_accuracy and self.evaluators.measures_action(kind, clips)
+        bar = tqdm(
+            total=len(clips) * (2 if labelled_too else 1),
+            desc=f"evaluation at step {trainer.global_step}",
+            unit="motion",
+            leave=False,
+            disable=not trainer.is_global_zero,
+        )  # about a minute: show it moves
+        with bar:
+            return self._scores(trainer, pl_module, clips, real, captions, conditions, guidance, generator, bar)
+
+    def _scores(self, trainer, pl_module, clips, real, captions, conditions, guidance, generator, bar) -> dict:
+        kind = pl_module.condition_kind
+        feats = generate(pl_module, conditions, clips.lengths, self.batch_size, generator, bar,
                          guidance=guidance, **self.sampling)  # fmt: skip
         gen = self.evaluators.embed_motion(feats)
         feats = self.evaluators.as_hml(feats)  # smoothness in the evaluators' feature space, as every metric
@@ -132,7 +146,7 @@ class GenerationEvaluation(L.Callback):
                                      generated_features=feats, seed=self.seed)  # fmt: skip
         if self.action_accuracy and self.evaluators.measures_action(kind, clips):
             generator.manual_seed(self.seed)
-            labelled = generate(pl_module, clips.label_captions(), clips.lengths, self.batch_size, generator,
+            labelled = generate(pl_module, clips.label_captions(), clips.lengths, self.batch_size, generator, bar,
                                 guidance=guidance, **self.sampling)  # fmt: skip
             values["action_accuracy"] = action_accuracy(self.evaluators, self.evaluators.embed_motion(labelled),
                                                         clips.actions)  # fmt: skip

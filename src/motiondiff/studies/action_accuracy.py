@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.eval import action_table, report
@@ -68,7 +69,8 @@ def measure(module, evaluators, items: list[dict], lengths: dict[str, int], n: i
     asked = [names.index(d["action"]) for d in items for _ in range(n)]
     frames = torch.tensor([lengths[d["action"]] for d in items for _ in range(n)])
     generator = torch.Generator().manual_seed(seed)
-    feats = generate(module, texts, frames, batch_size=128, generator=generator, **sampling)
+    with tqdm(total=len(texts), desc="descriptions", unit="motion") as bar:
+        feats = generate(module, texts, frames, batch_size=128, generator=generator, progress=bar, **sampling)
     predicted = evaluators.embed_motion(feats)["action_logits"].argmax(-1).tolist()
     return {"texts": texts, "asked": asked, "predicted": predicted, "names": names}
 

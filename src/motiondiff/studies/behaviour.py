@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import torch
 from omegaconf import OmegaConf
+from tqdm import tqdm
 
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.data.preparing.captions import measure
@@ -61,7 +62,7 @@ def speed_table(pipe: MotionPipeline, data_root, n: int, seed: int, **sampling) 
 
     train = load_split(data_root, "train")
     rows = []
-    for prompt, label in SPEED_PROMPTS:
+    for prompt, label in tqdm(SPEED_PROMPTS, desc="speed by length", unit="prompt"):
         real = [net_speed(train.arrays["joints"][train.clip_slice(i)], pipe.fps) for i in range(train.num_clips)
                 if train.label("content", i) == label]  # fmt: skip
         real_median = float(np.median(real)) if real else float("nan")
@@ -203,7 +204,7 @@ def report(module, data_root, n: int = 10, seed: int = 0, evaluators=None, promp
         known = set(module.hparams.action_names)
         prompts = tuple((label, seconds, label) for _, seconds, label in prompts if label in known)
     rows = {}
-    for prompt, seconds, label in prompts:
+    for prompt, seconds, label in tqdm(prompts, desc="behaviour", unit="prompt"):
         frames = round(seconds * fps)
         joints, feats = generate(pipe, prompt, seconds, n, seed, **sampling)
         real = real_clips(data_root, label, frames)
