@@ -69,9 +69,7 @@ allocator:
 
 # Run the notebooks and keep their outputs (figures, the quick start's GIF), so a reader on a code host sees them.
 notebooks: setup
-	$(PY) -c 'import sys, nbformat, nbclient; \
-	[nbformat.write(nbclient.NotebookClient(nbformat.read(p, 4), timeout=600, kernel_name="python3", \
-	 resources={"metadata": {"path": "notebooks"}}).execute(), p) for p in sys.argv[1:]]' notebooks/*.ipynb
+	$(PY) notebooks/execute.py notebooks/*.ipynb
 
 # Time training, the forward pass, sampling and text encoding on this machine (<= 10 min on 2 cores); writes
 # bench/results/latest.{json,md}. Run it on an otherwise idle machine: other work skews every row.

@@ -23,7 +23,7 @@ import math
 from collections.abc import Sequence
 
 import torch
-from tqdm.auto import tqdm
+from tqdm import tqdm  # plain: tqdm.auto warns in notebooks without ipywidgets
 
 from motiondiff.diffusion.process import GaussianDiffusion
 from motiondiff.diffusion.samplers import ModelFn, StepOptions, select_timesteps

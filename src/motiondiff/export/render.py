@@ -36,8 +36,8 @@ def stick_figure_animation(
     trail, a head marker. The camera follows the root at a fixed distance, so the body fills the frame however far
     it travels, and looks from the front-side of the travel direction (or of the facing when it stays in place),
     never along the line of motion. ``title``: one text, or (first frame, text) segments shown as they play.
-    Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``; close its figure when done
-    (``plt.close(anim._fig)``)."""
+    Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``; its figure has its own canvas, outside
+    pyplot (`video_axes`), so nothing needs closing and the notebook's own figures are untouched."""
     from matplotlib import animation
 
     fig, draw, frames = stick_frames(joints, skeleton, title, dpi, step)
@@ -104,10 +104,14 @@ def head_joint(skeleton: Skeleton) -> int | None:
 
 
 def video_axes(dpi: int):
-    """A 4-inch square figure filled by one 3D axes (matplotlib's x-y plane is our x-z ground, its z our y up)."""
-    import matplotlib.pyplot as plt
+    """A 4-inch square figure filled by one 3D axes (matplotlib's x-y plane is our x-z ground, its z our y up). The
+    figure has its own Agg canvas, outside pyplot: rendering never changes the caller's backend (a notebook's inline
+    figures keep showing) and needs no display."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    fig = plt.figure(figsize=(4, 4), dpi=dpi)
+    fig = Figure(figsize=(4, 4), dpi=dpi)
+    FigureCanvasAgg(fig)
     fig.subplots_adjust(left=0, right=1, bottom=0, top=1)
     ax = fig.add_subplot(projection="3d")
     ax.set_box_aspect((1, 1, 1), zoom=ZOOM)
@@ -183,12 +187,9 @@ def check_video_path(path: str | Path) -> Path:
 
 
 def quiet_matplotlib() -> None:
-    """The Agg backend (no display needed) and no INFO line for every saved animation."""
+    """No INFO line for every saved animation (the figures have their own Agg canvas: `video_axes`)."""
     import logging
 
-    import matplotlib
-
-    matplotlib.use("Agg")
     logging.getLogger("matplotlib.animation").setLevel(logging.WARNING)
 
 
@@ -196,7 +197,6 @@ def save_frames(fig, draw, frames, path: Path, fps: float, dpi: int) -> Path:
     """Write the figure after `draw(i)` for each of `frames` to `path` (.mp4 or .gif) at `fps` frames per second,
     atomically, and close the figure. Each frame is drawn once (FuncAnimation.save draws each twice)."""
     import matplotlib
-    import matplotlib.pyplot as plt
 
     writer = _writer(path.suffix.lower(), fps)
 
@@ -209,7 +209,7 @@ def save_frames(fig, draw, frames, path: Path, fps: float, dpi: int) -> Path:
     try:
         atomic_write(path, write, suffix=path.suffix.lower())
     finally:
-        plt.close(fig)
+        fig.clear()  # the figure is no pyplot figure: nothing else holds it once its artists go
     return path
 
 
