@@ -23,9 +23,10 @@ def scores(folder: Path, dm) -> tuple[dict, dict]:
     clips = EvalClips.from_dataset(dm.dataset("val"))
     predicted = evaluators.embed_motion(clips.features)["action_logits"].argmax(-1)
     names = meta["action_names"]
-    recall = {names[a]: float((predicted[clips.actions == a] == a).mean()) for a in np.unique(clips.actions)}
+    recall = {names[a]: (float((predicted[clips.actions == a] == a).mean()), int((clips.actions == a).sum()))
+              for a in np.unique(clips.actions)}  # fmt: skip
     return {"accuracy": float((predicted == clips.actions).mean()),
-            "balanced_accuracy": float(np.mean(list(recall.values())))}, recall  # fmt: skip
+            "balanced_accuracy": float(np.mean([r for r, _ in recall.values()]))}, recall  # fmt: skip
 
 
 def main(candidate: str) -> None:
@@ -37,8 +38,8 @@ def main(candidate: str) -> None:
     for name, (total, _) in rows.items():
         print(f"| {name} | {total['accuracy']:.3f} | {total['balanced_accuracy']:.3f} |")
     print("\n| action | val clips | released | candidate |\n|---|---:|---:|---:|")
-    for action in rows["released"][1]:
-        print(f"| {action} | | {rows['released'][1][action]:.2f} | {rows['candidate'][1][action]:.2f} |")
+    for action, (recall, count) in rows["released"][1].items():
+        print(f"| {action} | {count} | {recall:.2f} | {rows['candidate'][1][action][0]:.2f} |")
 
 
 if __name__ == "__main__":
