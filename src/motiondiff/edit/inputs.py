@@ -284,6 +284,7 @@ def read_bvh_input(source: str | os.PathLike):
     path = Path(str(source))
     if path.suffix.lower() != ".bvh" or not path.is_file():
         return None
+    check_input_file(path)  # unreadable by this user: said as such, not as a folder to write to
     return _read_motion(path, None)[0]
 
 

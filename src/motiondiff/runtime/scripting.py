@@ -165,7 +165,10 @@ def check_overrides(config_name: str, argv: list[str]) -> None:
         print(f"error: {_override_error(err)}", file=sys.stderr)
         sys.exit(2)
     except ValueError as err:  # the override parser's own limits (a 5000-digit number: Python's int-string bound)
-        print(f"error: cannot read the command line: {str(err).splitlines()[0][:200]}", file=sys.stderr)
+        longest = max(argv, key=len)
+        key = longest.split("=", 1)[0] if "=" in longest else longest[:20]
+        print(f"error: cannot read {key}= ({len(longest)} characters): {str(err).splitlines()[0][:120]}; give a "
+              "shorter value", file=sys.stderr)  # fmt: skip
         sys.exit(2)
     finally:
         GlobalHydra.instance().clear()
