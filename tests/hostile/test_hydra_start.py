@@ -11,7 +11,10 @@ CASES = {
     "added_misspelt_setting": (("+lenght=3",), ("adds a setting", "did you mean length")),
     "added_unknown_setting": (("+foo=bar",), ("adds a setting",)),
     "removed_setting": (("~checkpoint",), ("removes a setting",)),
-    "number_beyond_the_parser": ((f"length={'9' * 5000}",), ("cannot read length= (5007 characters)", "give a shorter value")),
+    "number_beyond_the_parser": (
+        (f"length={'9' * 5000}",),
+        ("cannot read length= (5007 characters)", "give a shorter value"),
+    ),
     "folder_name_too_long": (("hydra.run.dir=outputs/" + "d" * 300,), ("longer than the file system's 255",)),
     "unset_environment_variable": (("paths.output_dir=${oc.env:MOTIONDIFF_PROBE_UNSET}",), ("cannot be named",)),
 }

@@ -32,9 +32,14 @@ from motiondiff.runtime.hardware import (
 from motiondiff.runtime.paths import CONF_DIR, REPO_DIR, work_dir
 from motiondiff.runtime.settings import MAX_SWEEP_JOBS, MIN_FREE_BYTES
 
-# This process's part of its run folder's name (pid and a random token, fixed for the process): two runs started in
-# the same second never share a folder.
-RUN_ID = f"{os.getpid():x}{secrets.token_hex(2)}"
+
+def new_run_id() -> str:
+    """A run's part of its folder name (pid and a random token): two runs started in the same second never share a
+    folder, whether in two processes or one after the other in one process."""
+    return f"{os.getpid():x}{secrets.token_hex(2)}"
+
+
+RUN_ID = new_run_id()  # drawn again by every run_hydra call (two runs in one process and second differ too)
 USER_TEXT_KEYS = ("text", "prompts", "action", "prompt", "captions")  # user text: data, never interpolated
 
 
@@ -122,6 +127,8 @@ def run_hydra(config_name: str, run) -> None:
     if any(a in ("--help", "-h") for a in sys.argv[1:]):  # the settings explained (Hydra's: --hydra-help)
         print(command_help(config_name))
         return
+    global RUN_ID
+    RUN_ID = new_run_id()  # this run's folder is its own, not an earlier in-process run's of the same second
     register_resolvers()
     quiet_tool_caches()
     if not any(a.startswith("hydra.job.name=") for a in sys.argv[1:]):  # log files named after the command
