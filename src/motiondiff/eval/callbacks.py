@@ -125,29 +125,21 @@ class GenerationEvaluation(L.Callback):
         guidance = pl_module.default_guidance if self.guidance is None else self.guidance
         generator = torch.Generator(device=pl_module.device).manual_seed(self.seed)
         labelled_too = self.action_accuracy and self.evaluators.measures_action(kind, clips)
-        bar = tqdm(
-            total=len(clips) * (2 if labelled_too else 1),
-            desc=f"evaluation at step {trainer.global_step}",
-            unit="motion",
-            leave=False,
-            disable=not trainer.is_global_zero,
-        )  # about a minute: show it moves
-        with bar:
-            return self._scores(trainer, pl_module, clips, real, captions, conditions, guidance, generator, bar)
-
-    def _scores(self, trainer, pl_module, clips, real, captions, conditions, guidance, generator, bar) -> dict:
-        kind = pl_module.condition_kind
-        feats = generate(pl_module, conditions, clips.lengths, self.batch_size, generator, bar,
-                         guidance=guidance, **self.sampling)  # fmt: skip
+        with tqdm(total=len(clips) * (2 if labelled_too else 1), desc=f"evaluation at step {trainer.global_step}",
+                  unit="motion", leave=False, disable=not trainer.is_global_zero) as bar:  # fmt: skip
+            feats = generate(pl_module, conditions, clips.lengths, self.batch_size, generator, bar,
+                             guidance=guidance, **self.sampling)  # fmt: skip
+            labelled = None
+            if labelled_too:
+                generator.manual_seed(self.seed)
+                labelled = generate(pl_module, clips.label_captions(), clips.lengths, self.batch_size, generator, bar,
+                                    guidance=guidance, **self.sampling)  # fmt: skip
         gen = self.evaluators.embed_motion(feats)
         feats = self.evaluators.as_hml(feats)  # smoothness in the evaluators' feature space, as every metric
         text = self.evaluators.embed_text(captions) if kind == "text" else None
         values = replication_metrics(kind, self.evaluators, real, gen, text=text, actions=clips.actions,
                                      generated_features=feats, seed=self.seed)  # fmt: skip
-        if self.action_accuracy and self.evaluators.measures_action(kind, clips):
-            generator.manual_seed(self.seed)
-            labelled = generate(pl_module, clips.label_captions(), clips.lengths, self.batch_size, generator, bar,
-                                guidance=guidance, **self.sampling)  # fmt: skip
+        if labelled is not None:
             values["action_accuracy"] = action_accuracy(self.evaluators, self.evaluators.embed_motion(labelled),
                                                         clips.actions)  # fmt: skip
         if self.videos is not None and trainer.is_global_zero:  # rank 0 logs; the others have no loggers to fill

@@ -10,6 +10,8 @@ import os
 import stat
 from pathlib import Path
 
+NAME_MAX = 255  # bytes in one file or folder name (Linux, macOS and Windows file systems alike)
+
 
 def file_problem(path: str | os.PathLike, allow_empty: bool = False) -> str | None:
     """None for a readable regular file (non-empty unless ``allow_empty``), else what ``path`` is, as the end of a
@@ -33,3 +35,8 @@ def file_problem(path: str | os.PathLike, allow_empty: bool = False) -> str | No
     if info.st_size == 0 and not allow_empty:
         return "is empty (0 bytes)"
     return None
+
+
+def over_long_name(path: str | os.PathLike) -> str | None:
+    """The first part of ``path`` longer than a file system takes (NAME_MAX bytes), None when every part fits."""
+    return next((part for part in Path(path).parts if len(os.fsencode(part)) > NAME_MAX), None)

@@ -26,6 +26,7 @@ from motiondiff.runtime.boundary import (  # noqa: F401  (USER_ERRORS re-exporte
 )
 from motiondiff.runtime.command_help import command_help
 from motiondiff.runtime.errors import UsageError
+from motiondiff.runtime.file_kinds import NAME_MAX, over_long_name
 from motiondiff.runtime.hardware import (
     fast_cpu_precision,  # torch: imported when a config asks, not to start a command
 )
@@ -246,16 +247,13 @@ def _top_level_keys(config_name: str) -> list[str]:
     return sorted({m.group(1) for m in re.finditer(r"^([A-Za-z_][\w]*):", text, re.MULTILINE)} - {"defaults", "hydra"})
 
 
-NAME_MAX = 255  # bytes in one file or folder name (Linux, macOS and Windows file systems alike)
-
-
 def check_writable(folder: Path) -> None:
     """Whether ``folder`` can be made (a trial folder in its nearest existing parent), so a run folder that cannot
     be created fails as one line before Hydra tries."""
     import tempfile
 
     folder = folder.absolute()
-    long = next((part for part in folder.parts if len(part.encode()) > NAME_MAX), None)
+    long = over_long_name(folder)
     if long is not None:
         raise UsageError(f"cannot make the run folder: a folder name of {len(long.encode())} bytes ({long[:24]}...) is "
                          f"longer than the file system's {NAME_MAX}; choose a shorter hydra.run.dir= or paths.output_dir=")  # fmt: skip

@@ -37,6 +37,7 @@ from motiondiff.data.preparing.splits import rare_to_train, stratified_split, st
 from motiondiff.data.representations.hml_features import mean_std
 from motiondiff.data.sources import bandai
 from motiondiff.runtime.atomic import atomic_write
+from motiondiff.runtime.file_kinds import NAME_MAX, over_long_name
 
 
 class PrepareError(ValueError):
@@ -129,13 +130,12 @@ def _process(job: Job) -> ProcessedClip | str:
 # what a prepared dataset folder holds: a user's files of these names are replaced only with --force
 DATASET_FILES = ("meta.json", "report.json", "README.md", "LICENSE", "joint_map.json", "Mean.npy", "Std.npy",
                  *(f"{s}.npz" for s in SPLITS))  # fmt: skip
-NAME_MAX = 255  # bytes in one file or folder name
 
 
 def check_output(out: Path, force: bool) -> None:
     """``out`` can take a new dataset: a folder (or a path to one) with names the file system takes, and without
     a dataset or files a dataset would replace, unless ``force``."""
-    long = next((part for part in out.parts if len(os.fsencode(part)) > NAME_MAX), None)
+    long = over_long_name(out)
     if long is not None:
         raise PrepareError(f"--out: the folder name {long[:24]}... has {len(os.fsencode(long))} bytes, more than the "
                            f"file system's {NAME_MAX}; choose a shorter name")  # fmt: skip
