@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from cli_helpers import REPO, run_cli
 from hydra import compose, initialize_config_dir
+from PIL import Image
 
 from motiondiff.cli.common import UsageError, register_resolvers
 from motiondiff.data.datamodules import embedded_data_root
@@ -117,7 +118,7 @@ def test_joints_npy_input_a_window_and_videos(text_ckpt, tmp_path, clip):
     npy = tmp_path / "walk_joints.npy"
     np.save(npy, clip["joints"])
     out, res = _edit(tmp_path, text_ckpt, f"input={npy}", "kind=parts", "parts=[torso,arms,head]",
-                     "length=1", "num_samples=1", "export=gif")  # fmt: skip
+                     "length=1", "num_samples=1", "export=gif", "video.size=160")  # fmt: skip
     row = res["samples"][0]
     inputs = np.load(row["input_joints"])
     assert res["input"]["window"] == [0, 21] and inputs.shape == (20, 22, 3)  # 1 s = 20 edited frames
@@ -125,6 +126,7 @@ def test_joints_npy_input_a_window_and_videos(text_ckpt, tmp_path, clip):
     assert np.abs(inputs - joints_from_features(clip["features"])[:20]).max() <= 1e-2
     assert row["kept_max_error_m"] <= TOL
     assert (out / "input.gif").stat().st_size > 1000 and row["video"].endswith(".gif")
+    assert Image.open(row["video"]).size == (160, 160)  # video.size=
 
 
 # ---- bad input: one clear line ------------------------------------------------------------------------------------

@@ -74,7 +74,7 @@ def test_an_edit_input_that_is_no_motion_file_says_what_it_is(model, tmp_path):
 
 
 def test_a_prompt_that_looks_like_mathtext_is_drawn_as_text(tmp_path):
-    path = render_motion(glide(0, 0.5, frames=8), SMPL22, tmp_path / "m.gif", title="$_$ a person {walks}$", dpi=30)
+    path = render_motion(glide(0, 0.5, frames=8), SMPL22, tmp_path / "m.gif", title="$_$ a person {walks}$", size=120)
     assert path.stat().st_size > 0
 
 

@@ -12,7 +12,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps
-from motiondiff.cli.outputs import cleanup_option, export_formats
+from motiondiff.cli.outputs import cleanup_option, export_formats, video_size
 from motiondiff.cli.validate import RULES_EDIT, check
 from motiondiff.edit.cleanups import check_for_edit
 from motiondiff.edit.inputs import clip_data_root, load_input_motion, read_bvh_input
@@ -83,7 +83,7 @@ def run(cfg: DictConfig) -> Path:
     check(cfg, RULES_EDIT)  # types and ranges before any work
     check_num_samples(cfg.num_samples)
     cfg.device = resolve_device(cfg.device)  # auto: the GPU where there is one
-    formats, cleanup = export_formats(cfg), cleanup_option(cfg)
+    formats, cleanup, size = export_formats(cfg), cleanup_option(cfg), video_size(cfg)
     check_for_edit(cleanup)
     ckpt = find_model(cfg.checkpoint, cfg.paths.output_dir)
     try:
@@ -140,7 +140,7 @@ def run(cfg: DictConfig) -> Path:
         "representation": module.representation.name,
         "settings": {**result.settings, "clip_x0": module.clip_rule},
     }  # fmt: skip
-    rows = edited.save(out, formats, cfg.get("bvh_names"), summary=summary)
+    rows = edited.save(out, formats, cfg.get("bvh_names"), video_size=size, summary=summary)
     for r in rows:
         extra = (f"max boundary ratio {r['max_boundary_ratio']:.2f}" if result.kind == "inbetween"
                  else f"root-relative kept error {r['root_relative_kept_max_error_m']:.1e} m")  # fmt: skip

@@ -1,15 +1,16 @@
 """What the generation commands (sample.py, edit.py, sample.py method=guidedmotion) share about their outputs: the
-output options of a config (export formats, render body, clean-ups, temporal smoothing), checked before any
+output options of a config (export formats, render body, video size, clean-ups, temporal smoothing), checked before any
 sampling. Writing the samples is `MotionOutput.save`, the same for the commands and the Python API."""
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from omegaconf import DictConfig, ListConfig
+from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from motiondiff.edit.cleanups import parse_cleanup
 from motiondiff.export.outputs import parse_formats
+from motiondiff.export.render import VIDEO_SIZE, check_video_size
 from motiondiff.export.smpl_mesh import render_body
 from motiondiff.runtime.errors import UsageError
 
@@ -29,6 +30,12 @@ def render_option(cfg: DictConfig):
     """``render=`` and ``smpl_model=``: the SMPL body the videos show (None: stick figures), loaded and checked
     before the model loads (``export.smpl_mesh.render_body``)."""
     return render_body(cfg.get("render"), cfg.get("smpl_model"))
+
+
+def video_size(cfg: DictConfig) -> int:
+    """``video.size=``: the side of the mp4/gif videos in pixels (a config without the key: VIDEO_SIZE), checked
+    before any sampling (``export.render.check_video_size``)."""
+    return check_video_size(OmegaConf.select(cfg, "video.size", default=VIDEO_SIZE), "video.size")
 
 
 def cleanup_option(cfg: DictConfig) -> tuple[str, ...]:

@@ -17,7 +17,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps, to_dict
-from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma
+from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma, video_size
 from motiondiff.cli.prompt_inputs import check_one_source, check_prompt_inputs, read_prompts_file, split_timed
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.export.outputs import check_formats_for
@@ -75,7 +75,7 @@ def run(cfg: DictConfig) -> Path:
         check_num_samples(cfg.num_samples, MAX_LONG_SAMPLES)
         if cfg.frames is not None:
             raise UsageError("timed prompts set their own lengths: drop frames= (length= is ignored too)")
-    formats, cleanup, body = export_formats(cfg), cleanup_option(cfg), render_option(cfg)
+    formats, cleanup, body, size = export_formats(cfg), cleanup_option(cfg), render_option(cfg), video_size(cfg)
     module = load_model(ckpt, cfg.device)
     check_formats_for(formats, module.representation.skeleton, cfg.get("bvh_names"), body)
     prompts = collect_prompts(plain, module)
@@ -106,7 +106,7 @@ def run(cfg: DictConfig) -> Path:
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "steps": steps,
                "precision": pipe.precision, "clip_x0": module.clip_rule, "coverage_warnings": far,
                **({"long_motion": motions.info["long_motion"]} if seconds is not None else {})}  # fmt: skip
-    rows = motions.save(out, formats, cfg.get("bvh_names"), body=body, summary=summary)
+    rows = motions.save(out, formats, cfg.get("bvh_names"), body=body, video_size=size, summary=summary)
     what = f"long motion(s) of {motions.seconds():g} s" if seconds is not None else "sample(s)"
     print(f"\n{len(rows)} {what} written to {out}")
     return out

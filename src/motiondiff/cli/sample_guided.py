@@ -13,7 +13,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
 from motiondiff.cli.common import UsageError, find_model
-from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma
+from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma, video_size
 from motiondiff.cli.validate import RULES_SAMPLE, check
 from motiondiff.export.outputs import check_formats_for
 from motiondiff.guided.local_actions import LocalActionError, check_weights, local_descriptions
@@ -58,6 +58,7 @@ def run(cfg: DictConfig) -> Path:
         raise UsageError('method=guidedmotion needs text="..." (one caption; its verbs become the local actions)')
     text = check_text(cfg.text)
     formats, sigma, cleanup, body = export_formats(cfg), smoothing_sigma(cfg), cleanup_option(cfg), render_option(cfg)
+    size = video_size(cfg)
     if cfg.checkpoint in ("latest", "best"):
         raise UsageError("method=guidedmotion needs checkpoint=shipped (the released GuidedMotion model) or "
                          "checkpoint=<a train_latent.py .ckpt or a GuidedMotion release>")  # fmt: skip
@@ -91,6 +92,6 @@ def run(cfg: DictConfig) -> Path:
         "guidance": module.hparams.sampling.get("guidance", 7.5) if cfg.guidance is None else float(cfg.guidance),
         "local_actions": result.info["local_actions"],
     }  # fmt: skip
-    rows = motions.save(out, formats, cfg.get("bvh_names"), body=body, summary=summary)
+    rows = motions.save(out, formats, cfg.get("bvh_names"), body=body, video_size=size, summary=summary)
     print(f"\n{len(rows)} GuidedMotion sample(s) of {text!r} written to {out}")
     return out

@@ -1,5 +1,6 @@
 """The web demo (`motiondiff-demo`): a Gradio page over the public pipelines. It sits above `motiondiff.pipelines`
-and below the CLI: only `motiondiff.cli` imports it. `models` has no web code; `app` builds the page.
+and below the CLI: only `motiondiff.cli` imports it. `models`, `modes`, `files` and `requests` have no web code;
+`app` builds the page, `handlers` answers it, `results_view` shows the results.
 
     from motiondiff.demo import DemoModels, build_demo
     build_demo(DemoModels()).launch()
@@ -7,7 +8,8 @@ and below the CLI: only `motiondiff.cli` imports it. `models` has no web code; `
 
 import os
 
-from motiondiff.demo.models import DemoModels, generate
+from motiondiff.demo.models import DemoModels
+from motiondiff.demo.modes.generate import generate
 
 
 def build_demo(*args, **kwargs):

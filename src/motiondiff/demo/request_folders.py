@@ -11,7 +11,8 @@ import tempfile
 from pathlib import Path
 
 KEEP_REQUESTS = 20
-KINDS = ("run", "edit")  # the folder name prefixes of this module's requests: nothing else in the folder is touched
+# the folder name prefixes of this module's requests (one per mode): nothing else in the folder is touched
+KINDS = ("run", "edit", "inbetween", "timeline")
 
 
 @contextlib.contextmanager

@@ -8,18 +8,21 @@ from pathlib import Path
 from motiondiff.edit.measures import edit_numbers
 from motiondiff.export.naming import slug
 from motiondiff.export.outputs import export_features
+from motiondiff.export.render import VIDEO_SIZE
 from motiondiff.runtime.atomic import save_npy
 
 
-def save_edits(out: Path, edited, formats, rig_names=None) -> list[dict]:
+def save_edits(out: Path, edited, formats, rig_names=None, video_size: int = VIDEO_SIZE) -> list[dict]:
     """The input and each edit of ``edited`` (a MotionOutput of an edit: its ``edit`` and ``source``) as arrays and
     the ``formats`` (export.outputs); one results row per edit. After ``edited.cleaned("feet")`` the saved joints are
     the foot-skate cleaned ones (kept frames and joints untouched; the model's joints go to *_joints_raw.npy) and the
-    row reports the sliding before and after."""
+    row reports the sliding before and after. ``video_size``: the side of the mp4/gif videos in pixels."""
     result, motion, rep, fps = edited.edit, edited.source, edited.representation, float(edited.fps)
     condition = edited.prompts[0] if edited.prompts else None
     title = f"{result.kind}: {condition or 'unconditioned'}"
-    inputs = export_features(out / "input", rep, motion.features, fps, formats, title="input", rig_names=rig_names)
+    inputs = export_features(
+        out / "input", rep, motion.features, fps, formats, title="input", rig_names=rig_names, video_size=video_size
+    )
     save_npy(out / "keep_mask.npy", result.keep[0])
     cleaned = edited.info.get("cleanup")
     rows = []
@@ -33,7 +36,8 @@ def save_edits(out: Path, edited, formats, rig_names=None) -> list[dict]:
         save_npy(files["features"], result.features[k])
         save_npy(files["input_joints"], result.input_joints[k])
         exports = export_features(stem, rep, result.features[k], fps, formats, title=title,
-                                  joints=edited.joints[k] if cleaned else None, rig_names=rig_names)  # fmt: skip
+                                  joints=edited.joints[k] if cleaned else None, rig_names=rig_names,
+                                  video_size=video_size)  # fmt: skip
         rows.append({"index": k, **files, "video": exports.get("mp4", exports.get("gif")), "exports": exports,
                      "input_video": inputs.get("mp4", inputs.get("gif")), "input_exports": inputs,
                      **edit_numbers(result, k, fps), **(cleaned[k] if cleaned else {})})  # fmt: skip

@@ -19,7 +19,7 @@ from pathlib import Path
 import torch
 
 from motiondiff.edit.smoothing import smooth_joints
-from motiondiff.export.render import render_motion
+from motiondiff.export.render import check_video_size, render_motion
 from motiondiff.lit.generation import fitted_steps, generate_features
 from motiondiff.runtime.errors import UsageError
 
@@ -27,7 +27,7 @@ log = logging.getLogger(__name__)
 KEY = "callbacks.evaluation.videos"
 TAG = "samples"  # the dashboards' section: samples/<k>_<condition>
 MAX_VIDEOS = 8
-LIMITS = {"count": (1, MAX_VIDEOS), "seconds": (0.1, 60), "steps": (1, 1000), "dpi": (10, 300), "frame_step": (1, 100)}
+LIMITS = {"count": (1, MAX_VIDEOS), "seconds": (0.1, 60), "steps": (1, 1000), "frame_step": (1, 100)}
 
 
 @dataclass
@@ -39,7 +39,7 @@ class SampleVideos:
     count: int = 2  # unconditioned models (and actions=None): how many motions
     seconds: float = 3.0
     steps: int = 10  # DDIM steps (at most the model's diffusion steps)
-    dpi: int = 40  # the renderer's 4-inch figure: 160 pixels square
+    size: int = 160  # pixels square: small, as every evaluation logs them
     frame_step: int = 3  # every 3rd frame
     seed: int = 0  # the evaluation's seed
 
@@ -51,6 +51,7 @@ class SampleVideos:
             if isinstance(value, bool) or not isinstance(value, kind) or not low <= value <= high:
                 raise UsageError(f"{KEY}.{key}={value!r}: must be {'an integer' if whole else 'a number'} from {low:g}"
                                  f" to {high:g}; fix it with {KEY}.{key}=<value>")  # fmt: skip
+        check_video_size(self.size, f"{KEY}.size")  # the rule of the commands' video.size
 
     @classmethod
     def from_config(cls, cfg, seed: int = 0) -> SampleVideos | None:
@@ -116,7 +117,7 @@ class SampleVideos:
         for k, (condition, f) in enumerate(zip(conditions, feats, strict=True)):
             joints = smooth_joints(rep.decode_numpy(f), sigma)
             tag = f"{TAG}/{k}_{slug(condition)}"
-            path = render_motion(joints, rep.skeleton, folder / f"{k}_{slug(condition)}.gif", fps=fps, dpi=self.dpi,
+            path = render_motion(joints, rep.skeleton, folder / f"{k}_{slug(condition)}.gif", fps=fps, size=self.size,
                                  frame_step=self.frame_step)  # fmt: skip
             videos.append((tag, path, "unconditioned" if condition is None else str(condition)))
         return videos

@@ -1,7 +1,7 @@
 """Motion outputs people can use: `export_motion` writes one motion in any of FORMATS next to a common stem.
 
 - npy: joints (N, J, 3) float32, metres, y up;
-- mp4 / gif: stick-figure video (render.render_motion);
+- mp4 / gif: stick-figure video (render.render_motion), `video_size` pixels square;
 - bvh: animation file on the skeleton (bvh_export; fit error in its ExportReport);
 - html: offline interactive 3D viewer (html_viewer).
 
@@ -16,7 +16,7 @@ import numpy as np
 
 from motiondiff.export.bvh_export import ExportReport, export_bvh, export_bvh_from_features
 from motiondiff.export.html_viewer import export_html
-from motiondiff.export.render import Title, render_motion
+from motiondiff.export.render import VIDEO_SIZE, Title, render_motion
 from motiondiff.export.smpl_export import export_smpl, export_smpl_from_features, smpl_joints
 from motiondiff.geometry.skeleton import Skeleton
 from motiondiff.runtime.atomic import atomic_write
@@ -36,10 +36,12 @@ def export_motion(
     title: Title = "",
     rotations: np.ndarray | None = None,
     root: np.ndarray | None = None,
+    video_size: int = VIDEO_SIZE,
 ) -> dict[str, Path]:
     """Write `joints` (N, J, 3) as `{stem}.{format}` for each format; returns {format: path}. `rotations` and `root`
     (a rotation representation's local quaternions and root positions) go into the BVH as they are, else it is
-    solved by IK. Unknown formats are refused before anything is written."""
+    solved by IK. ``video_size``: the side of the mp4/gif in pixels. Unknown formats are refused before anything is
+    written."""
     unknown = [f for f in formats if f not in FORMATS]
     if unknown:
         raise ValueError(f"unknown export format(s) {unknown}; choose from {', '.join(FORMATS)}")
@@ -57,7 +59,7 @@ def export_motion(
             array = np.asarray(joints, dtype=np.float32)
             paths[fmt] = atomic_write(path, lambda tmp, a=array: np.save(tmp, a), suffix=".npy")
         elif fmt in ("mp4", "gif"):
-            paths[fmt] = render_motion(joints, skeleton, path, title=title, fps=fps)
+            paths[fmt] = render_motion(joints, skeleton, path, title=title, fps=fps, size=video_size)
         elif fmt == "bvh":
             paths[fmt] = export_bvh(path, joints, skeleton, fps, rotations=rotations, root=root).path
         else:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.export.render import (
+    VIDEO_SIZE,
     Title,
     camera_azimuth,
     check_video_path,
@@ -52,7 +53,7 @@ def mesh_frames(
     vertices: np.ndarray,
     faces: np.ndarray,
     title: Title = "",
-    dpi: int = 80,
+    size: int = VIDEO_SIZE,
     step: int = 1,
     *,
     joints: np.ndarray | None = None,
@@ -72,7 +73,7 @@ def mesh_frames(
     half = follow_half(vertices)
     azim = camera_azimuth(followed, skeleton if joints is not None else None)
     light = light_direction(azim)
-    fig, ax = video_axes(dpi)
+    fig, ax = video_axes(size)
     ax.computed_zorder = False  # the ground, then the trail, then the body: the floor never covers the feet
     body = Poly3DCollection(np.zeros((0, 3, 3)), linewidths=0.3, zorder=3)  # edges in the face colour: no seams
     ax.add_collection3d(body)
@@ -101,20 +102,20 @@ def render_mesh(
     path: str | Path,
     title: Title = "",
     fps: float = 20.0,
-    dpi: int = 80,
     frame_step: int = 1,
     *,
     joints: np.ndarray | None = None,
     skeleton: Skeleton | None = None,
+    size: int = VIDEO_SIZE,
 ) -> Path:
     """Animate meshes (N, V, 3) (metres, y up; triangles `faces` (F, 3)) to `path` (.mp4 or .gif): a shaded light
-    gray body in a 4-inch square figure of ``4 * dpi`` pixels, every ``frame_step``-th frame at the motion's own
+    gray body, ``size`` pixels square (render.video_axes), every ``frame_step``-th frame at the motion's own
     speed. ``joints``/``skeleton``: the motion, whose root the camera follows (`mesh_frames`)."""
     path = check_video_path(path)
     frame_step = max(1, int(frame_step))
     quiet_matplotlib()
-    frames = mesh_frames(vertices, faces, title, dpi, frame_step, joints=joints, skeleton=skeleton)
-    return save_frames(*frames, path, fps / frame_step, dpi)
+    frames = mesh_frames(vertices, faces, title, size, frame_step, joints=joints, skeleton=skeleton)
+    return save_frames(*frames, path, fps / frame_step)
 
 
 def _checked(vertices, faces) -> tuple[np.ndarray, np.ndarray]:

@@ -17,9 +17,10 @@ from motiondiff.data.formats.smpl_params import SmplBody
 from motiondiff.data.representations import Representation
 from motiondiff.export import export_motion
 from motiondiff.export.blender import BLENDER_FORMATS, check_blender, convert_bvh
+from motiondiff.export.body_render import MannequinBody, mannequin_mesh
 from motiondiff.export.bvh_export import export_bvh, export_bvh_from_features
 from motiondiff.export.mesh_render import render_mesh
-from motiondiff.export.render import Title
+from motiondiff.export.render import VIDEO_SIZE, Title, check_video_size
 from motiondiff.export.rig_names import with_rig_names
 from motiondiff.export.smpl_export import check_smpl_skeleton, export_smpl, export_smpl_from_features
 from motiondiff.export.smpl_mesh import check_mesh_skeleton, smpl_vertices
@@ -28,7 +29,7 @@ from motiondiff.runtime.errors import UsageError
 
 OUTPUT_FORMATS = ("mp4", "gif", "bvh", "html", "smpl", *BLENDER_FORMATS)  # the arrays (.npy) are always written
 ROTATION_FORMATS = ("bvh", "smpl")  # written from the features (a model's own rotations), or solved from changed joints
-VIDEO_FORMATS = ("mp4", "gif")  # stick figures, or with a body model (render=mesh) its shaded mesh
+VIDEO_FORMATS = ("mp4", "gif")  # stick figures, or a shaded body: the mannequin (render=body) or SMPL (render=mesh)
 
 
 def parse_formats(value: str | Sequence[str] | None) -> list[str]:
@@ -48,19 +49,27 @@ def parse_formats(value: str | Sequence[str] | None) -> list[str]:
 
 
 def check_formats_for(
-    formats: Sequence[str], skeleton: Skeleton, rig_names: str | None = None, body: SmplBody | None = None
+    formats: Sequence[str],
+    skeleton: Skeleton,
+    rig_names: str | None = None,
+    body: SmplBody | MannequinBody | None = None,
+    video_size: int = VIDEO_SIZE,
 ) -> None:
     """Refuse, before anything is generated or written, formats the skeleton cannot be written in (smpl, and videos
-    of a `body` model's mesh: SMPL-22 or SMPL-24 only); one UsageError naming what is supported."""
+    of a `body` model's mesh: SMPL-22 or SMPL-24 only) and a video size no video can have; one UsageError naming
+    what is supported."""
     formats = parse_formats(formats)
+    check_video_size(video_size, "video_size")
     if "smpl" in formats:
         check_smpl_skeleton(skeleton)
     if body is not None:
-        check_mesh_skeleton(skeleton)
+        render = "body" if isinstance(body, MannequinBody) else "mesh"  # the mannequin fits any skeleton
+        if render == "mesh":
+            check_mesh_skeleton(skeleton)
         if not any(f in VIDEO_FORMATS for f in formats):
-            asked = ",".join(formats) or "none"
-            raise UsageError(f"render=mesh draws the SMPL body in the mp4/gif videos, and export={asked} has none: "
-                             "add mp4 or gif to export= (or drop render=mesh)")  # fmt: skip
+            asked, what = ",".join(formats) or "none", "the mannequin" if render == "body" else "the SMPL body"
+            raise UsageError(f"render={render} draws {what} in the mp4/gif videos, and export={asked} has none: "
+                             f"add mp4 or gif to export= (or drop render={render})")  # fmt: skip
     check_blender(formats)  # fbx/glb: Blender must be there
     with_rig_names(skeleton, rig_names)  # a preset this skeleton has names for
 
@@ -74,16 +83,18 @@ def export_features(
     title: Title = "",
     joints: np.ndarray | None = None,
     rig_names: str | None = None,
-    body: SmplBody | None = None,
+    body: SmplBody | MannequinBody | None = None,
+    video_size: int = VIDEO_SIZE,
 ) -> dict:
     """Write ``{stem}.{format}`` for each format; returns {format: path} and, with a BVH, its fit error
     ("bvh_max_error_m", "bvh_mean_error_m": FK of the file against the joints it was made from; generated joints
     stretch their bones from frame to frame, which a BVH's fixed bone lengths cannot follow exactly); with smpl,
     ``{stem}_smpl.npz`` and the same three numbers ("smpl_max_error_m", ...). ``joints``: the motion to show when
     it is not simply the features decoded (e.g. smoothed or cleaned up). ``body``: an SMPL body model
-    (`smpl_mesh.render_body`) whose mesh the mp4/gif videos show instead of stick figures."""
+    or the mannequin (`smpl_mesh.render_body`) whose mesh the mp4/gif videos show instead of stick figures; fbx/glb
+    always carry the mannequin. ``video_size``: the videos' side in pixels."""
     formats = parse_formats(formats)
-    check_formats_for(formats, representation.skeleton, rig_names, body)
+    check_formats_for(formats, representation.skeleton, rig_names, body, video_size)
     named = with_rig_names(representation.skeleton, rig_names)  # bone names of the bvh/fbx/glb files
     stem = Path(stem)
     written: dict = {}
@@ -114,7 +125,8 @@ def export_features(
                 export_bvh(scratch, joints, named, fps)
         try:
             for fmt in blender:
-                written[fmt] = str(convert_bvh(bvh or scratch, stem.parent / f"{stem.name}.{fmt}", fps))
+                path = convert_bvh(bvh or scratch, stem.parent / f"{stem.name}.{fmt}", fps, skeleton=named)
+                written[fmt] = str(path)  # with the mannequin bound to the bones
         finally:
             if scratch is not None:
                 scratch.unlink(missing_ok=True)
@@ -122,13 +134,18 @@ def export_features(
     if others:
         shown = representation.decode_numpy(np.asarray(features)) if joints is None else joints
         meshes = [f for f in others if f in VIDEO_FORMATS] if body is not None else []
-        if meshes:  # the body model's mesh, posed by the joints shown (once for both videos)
-            vertices = smpl_vertices(shown, representation.skeleton, fps, body)
+        if meshes:  # the body's mesh (the mannequin or the SMPL model), posed by the joints shown (once for both)
+            if isinstance(body, MannequinBody):
+                vertices, faces = mannequin_mesh(shown, representation.skeleton)
+            else:
+                vertices, faces = smpl_vertices(shown, representation.skeleton, fps, body), body.faces
             for fmt in meshes:
-                path = render_mesh(vertices, body.faces, stem.parent / f"{stem.name}.{fmt}", title, fps, joints=shown,
-                                   skeleton=representation.skeleton)  # fmt: skip
+                path = render_mesh(vertices, faces, stem.parent / f"{stem.name}.{fmt}", title, fps, joints=shown,
+                                   skeleton=representation.skeleton, size=video_size)  # fmt: skip
                 written[fmt] = str(path)
         rest = [f for f in others if f not in meshes]
-        paths = export_motion(stem, shown, representation.skeleton, fps, rest, title=title) if rest else {}
+        paths = {}
+        if rest:
+            paths = export_motion(stem, shown, representation.skeleton, fps, rest, title=title, video_size=video_size)
         written.update({fmt: str(p) for fmt, p in paths.items()})
     return written

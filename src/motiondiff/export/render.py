@@ -1,4 +1,9 @@
-"""Stick-figure animations (MP4 or GIF) of joint positions, with a ground grid and the root's trajectory trail.
+"""Stick-figure animations (MP4 or GIF) of joint positions: left limbs blue and right limbs red with a legend saying
+so, a ground grid, the root's trajectory trail, a camera that follows the root, and the prompt as the title.
+
+A video is `size` pixels square (VIDEO_SIZE by default; video.size= in the commands). The figure is always
+FIGURE_INCHES wide and its dots per inch follow the size, so lines and text, drawn in points, keep their share of
+the frame at every size: a larger video is the same picture, sharper.
 
 MP4 uses the ffmpeg binary bundled by the `imageio-ffmpeg` wheel (no system ffmpeg needed); GIF uses Pillow.
 Files are written to a temporary name and renamed, so a failed render leaves nothing behind.
@@ -6,6 +11,7 @@ Files are written to a temporary name and renamed, so a failed render leaves not
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -13,9 +19,13 @@ import numpy as np
 
 from motiondiff.geometry.skeleton import Skeleton
 from motiondiff.runtime.atomic import atomic_write
+from motiondiff.runtime.errors import UsageError
 
 # Left limbs blue, right limbs red, torso dark: the usual convention in motion papers.
 _COLORS = {"left": "#1f77b4", "right": "#d62728", "torso": "#333333"}
+VIDEO_SIZE = 720  # pixels, the side of a square video
+MIN_VIDEO_SIZE, MAX_VIDEO_SIZE = 64, 2160  # below 64 nothing can be read; 2160 is 4K's height
+FIGURE_INCHES = 4  # the figure's side; its dpi is size / FIGURE_INCHES
 
 
 def _chain_color(chain: tuple[int, ...], skeleton: Skeleton) -> str:
@@ -30,26 +40,29 @@ Title = str | Sequence[tuple[int, str]]  # one title, or (first frame, title) pe
 
 
 def stick_figure_animation(
-    joints: np.ndarray, skeleton: Skeleton, title: Title = "", fps: float = 20.0, dpi: int = 80, step: int = 1
+    joints: np.ndarray, skeleton: Skeleton, title: Title = "", fps: float = 20.0, size: int = VIDEO_SIZE, step: int = 1
 ):
-    """A matplotlib FuncAnimation of (N, J, 3) joints (metres, y up): every ``step``-th frame, ground grid, root
-    trail, a head marker. The camera follows the root at a fixed distance, so the body fills the frame however far
-    it travels, and looks from the front-side of the travel direction (or of the facing when it stays in place),
-    never along the line of motion. ``title``: one text, or (first frame, text) segments shown as they play.
-    Show it in a notebook with ``IPython.display.HTML(anim.to_jshtml())``; its figure has its own canvas, outside
-    pyplot (`video_axes`), so nothing needs closing and the notebook's own figures are untouched."""
+    """A matplotlib FuncAnimation of (N, J, 3) joints (metres, y up), ``size`` pixels square: every ``step``-th
+    frame, ground grid, root trail, a head marker, a left/right colour legend. The camera follows the root at a fixed
+    distance, so the body fills the frame however far it travels, and looks from the front-side of the travel
+    direction (or of the facing when it stays in place), never along the line of motion. ``title``: one text, or
+    (first frame, text) segments shown as they play. Show it in a notebook with
+    ``IPython.display.HTML(anim.to_jshtml())``; its figure has its own canvas, outside pyplot (`video_axes`), so
+    nothing needs closing and the notebook's own figures are untouched."""
     from matplotlib import animation
 
-    fig, draw, frames = stick_frames(joints, skeleton, title, dpi, step)
+    fig, draw, frames = stick_frames(joints, skeleton, title, size, step)
     return animation.FuncAnimation(fig, draw, frames=frames, interval=1000 * max(1, int(step)) / fps)
 
 
-def stick_frames(joints: np.ndarray, skeleton: Skeleton, title: Title = "", dpi: int = 80, step: int = 1):
-    """(figure, draw(frame index), frame indices) of `stick_figure_animation`, for `save_frames`."""
+def stick_frames(joints: np.ndarray, skeleton: Skeleton, title: Title = "", size: int = VIDEO_SIZE, step: int = 1):
+    """(figure, draw(frame index), frame indices) of `stick_figure_animation`, for `save_frames`. The legend belongs
+    to the figure, so clearing the axes each frame keeps it."""
     joints = np.asarray(joints, dtype=np.float64)
     if joints.ndim != 3 or joints.shape[1:] != (skeleton.num_joints, 3):
         raise ValueError(f"expected joints (frames, {skeleton.num_joints}, 3), got {joints.shape}")
-    fig, ax = video_axes(dpi)
+    fig, ax = video_axes(size)
+    side_legend(fig)
     trail = joints[:, 0, [0, 2]]
     half = follow_half(joints)
     azim = camera_azimuth(joints, skeleton)
@@ -61,13 +74,13 @@ def stick_frames(joints: np.ndarray, skeleton: Skeleton, title: Title = "", dpi:
         follow(ax, azim, trail[i], half)
         text = title_at(title, i)
         if text:
-            ax.text2D(
-                0.5, 0.97, wrap_title(text), transform=ax.transAxes, ha="center", va="top", fontsize=8, parse_math=False
-            )  # a prompt is plain text: "$_$" is not mathtext
+            # a prompt is plain text: "$_$" is not mathtext
+            ax.text2D(0.5, 0.97, wrap_title(text), transform=ax.transAxes, ha="center", va="top",
+                      fontsize=TITLE_POINTS, parse_math=False)  # fmt: skip
         draw_ground(ax, trail, i, half)
         frame = joints[i]
         for chain, color in chains:
-            ax.plot(frame[list(chain), 0], frame[list(chain), 2], frame[list(chain), 1], color=color, lw=2.5)
+            ax.plot(frame[list(chain), 0], frame[list(chain), 2], frame[list(chain), 1], color=color, lw=LIMB_POINTS)
         if head is not None:
             ax.scatter(*frame[head, [0, 2, 1]], s=90, color=_COLORS["torso"], depthshade=False)
         return []
@@ -75,6 +88,10 @@ def stick_frames(joints: np.ndarray, skeleton: Skeleton, title: Title = "", dpi:
     return fig, draw, range(0, len(joints), max(1, int(step)))
 
 
+LIMB_POINTS = 2.5  # limb line width: 6 pixels at 720, 2.8 at 320
+TITLE_POINTS = 8.5  # the title's text: 21 pixels high at 720 (48 characters a line fit the frame)
+LEGEND_POINTS = 8
+GRID_COLOR, GRID_POINTS = "#dddddd", 0.8  # the ground grid: light, 2 pixels wide at 720
 ELEVATION = 15  # degrees above the ground: low enough to read heights, high enough to see the ground trail
 ZOOM = 1.35  # matplotlib's 3D box leaves wide margins at zoom 1
 SIDE_ANGLE = 55  # degrees between the travel (or facing) direction and the camera: front-side, never edge-on
@@ -103,19 +120,40 @@ def head_joint(skeleton: Skeleton) -> int | None:
     return heads[0] if heads else None
 
 
-def video_axes(dpi: int):
-    """A 4-inch square figure filled by one 3D axes (matplotlib's x-y plane is our x-z ground, its z our y up). The
-    figure has its own Agg canvas, outside pyplot: rendering never changes the caller's backend (a notebook's inline
-    figures keep showing) and needs no display."""
+def video_axes(size: int = VIDEO_SIZE):
+    """A figure of ``size`` x ``size`` pixels (FIGURE_INCHES at size / FIGURE_INCHES dpi) filled by one 3D axes
+    (matplotlib's x-y plane is our x-z ground, its z our y up). The figure has its own Agg canvas, outside pyplot:
+    rendering never changes the caller's backend (a notebook's inline figures keep showing) and needs no display."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(4, 4), dpi=dpi)
+    size = check_video_size(size)
+    fig = Figure(figsize=(FIGURE_INCHES, FIGURE_INCHES), dpi=size / FIGURE_INCHES)
     FigureCanvasAgg(fig)
     fig.subplots_adjust(left=0, right=1, bottom=0, top=1)
     ax = fig.add_subplot(projection="3d")
     ax.set_box_aspect((1, 1, 1), zoom=ZOOM)
     return fig, ax
+
+
+def side_legend(fig) -> None:
+    """The key to the limb colours in the figure's lower left corner: a blue "left" line over a red "right" one."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=_COLORS[side], lw=LIMB_POINTS, label=side) for side in ("left", "right")]
+    fig.legend(handles=handles, loc="lower left", fontsize=LEGEND_POINTS, handlelength=1.6, framealpha=0.85,
+               edgecolor="#cccccc")  # fmt: skip
+
+
+def check_video_size(size, name: str = "size") -> int:
+    """``size`` as the side of a square video in pixels, else one UsageError naming the fix: a whole number from
+    MIN_VIDEO_SIZE to MAX_VIDEO_SIZE, even (H.264 video needs even sides). ``name``: the setting as the user wrote it
+    (video.size in the commands, video_size in the Python API)."""
+    if (isinstance(size, bool) or not isinstance(size, numbers.Integral) or not MIN_VIDEO_SIZE <= size <= MAX_VIDEO_SIZE
+            or size % 2):  # fmt: skip
+        raise UsageError(f"{name}={size!r}: the video's side in pixels must be an even whole number from "
+                         f"{MIN_VIDEO_SIZE} to {MAX_VIDEO_SIZE}; fix it with e.g. {name}={VIDEO_SIZE}")  # fmt: skip
+    return int(size)
 
 
 def follow_half(points: np.ndarray) -> float:
@@ -141,9 +179,9 @@ def draw_ground(ax, trail: np.ndarray, i: int, half: float, zorder: float | None
     extra = {} if zorder is None else {"zorder": zorder}
     lines = []
     for g in np.arange(np.floor(cx - half), np.ceil(cx + half) + 0.25, 0.5):
-        lines += ax.plot([g, g], [cz - half, cz + half], [0, 0], color="#dddddd", lw=0.5, **extra)
+        lines += ax.plot([g, g], [cz - half, cz + half], [0, 0], color=GRID_COLOR, lw=GRID_POINTS, **extra)
     for g in np.arange(np.floor(cz - half), np.ceil(cz + half) + 0.25, 0.5):
-        lines += ax.plot([cx - half, cx + half], [g, g], [0, 0], color="#dddddd", lw=0.5, **extra)
+        lines += ax.plot([cx - half, cx + half], [g, g], [0, 0], color=GRID_COLOR, lw=GRID_POINTS, **extra)
     lines += ax.plot(trail[: i + 1, 0], trail[: i + 1, 1], np.zeros(i + 1), color="#ff9900", lw=1.5, **extra)
     return lines
 
@@ -164,15 +202,16 @@ def render_motion(
     path: str | Path,
     title: Title = "",
     fps: float = 20.0,
-    dpi: int = 80,
+    size: int = VIDEO_SIZE,
     frame_step: int = 1,
 ) -> Path:
-    """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif): a 4-inch square figure of ``4 * dpi``
-    pixels, every ``frame_step``-th frame (played at the motion's own speed)."""
+    """Animate (N, J, 3) joints (metres, y up) to `path` (.mp4 or .gif), ``size`` pixels square, every
+    ``frame_step``-th frame (played at the motion's own speed)."""
     path = check_video_path(path)
+    size = check_video_size(size)
     frame_step = max(1, int(frame_step))
     quiet_matplotlib()
-    return save_frames(*stick_frames(joints, skeleton, title, dpi, frame_step), path, fps / frame_step, dpi)
+    return save_frames(*stick_frames(joints, skeleton, title, size, frame_step), path, fps / frame_step)
 
 
 def check_video_path(path: str | Path) -> Path:
@@ -193,15 +232,16 @@ def quiet_matplotlib() -> None:
     logging.getLogger("matplotlib.animation").setLevel(logging.WARNING)
 
 
-def save_frames(fig, draw, frames, path: Path, fps: float, dpi: int) -> Path:
-    """Write the figure after `draw(i)` for each of `frames` to `path` (.mp4 or .gif) at `fps` frames per second,
-    atomically, and close the figure. Each frame is drawn once (FuncAnimation.save draws each twice)."""
+def save_frames(fig, draw, frames, path: Path, fps: float) -> Path:
+    """Write the figure after `draw(i)` for each of `frames` to `path` (.mp4 or .gif) at `fps` frames per second and
+    at the figure's own pixel size (`video_axes`), atomically, and close the figure. Each frame is drawn once
+    (FuncAnimation.save draws each twice)."""
     import matplotlib
 
     writer = _writer(path.suffix.lower(), fps)
 
     def write(tmp):
-        with matplotlib.rc_context({"savefig.bbox": None}), writer.saving(fig, tmp, dpi):
+        with matplotlib.rc_context({"savefig.bbox": None}), writer.saving(fig, tmp, fig.dpi):
             for i in frames:
                 draw(i)
                 writer.grab_frame()

@@ -15,30 +15,32 @@ from pathlib import Path
 import numpy as np
 
 from motiondiff.data.formats.smpl_params import BODY_JOINTS, SmplBody, SmplParamsError, load_smpl_body
+from motiondiff.export.body_render import MANNEQUIN, MannequinBody
 from motiondiff.export.smpl_export import SMPL_NEUTRAL_PELVIS, check_smpl_skeleton, smpl_parameters
 from motiondiff.geometry.rotations import rotvec_to_quat
 from motiondiff.geometry.skeleton import SMPL22, SMPL24, Skeleton
 from motiondiff.runtime.errors import UsageError
 
-RENDERS = ("stick", "mesh")
+RENDERS = ("stick", "mesh", "body")
 GET_MODEL = ("the SMPL body model is licence-restricted and not shipped: register at smpl.is.tue.mpg.de, download "
              "the model (or SMPL-X/SMPL+H), save it as a .npz of plain arrays and pass smpl_model=<path to the "
              "model .npz>")  # fmt: skip
 CHUNK = 64  # frames posed at once: bounds the skinning's memory (about 1.5 MB per frame for SMPL)
 
 
-def render_body(render: str | None, smpl_model: str | Path | None) -> SmplBody | None:
-    """The body model the videos show for ``render=`` (stick: None; mesh: the model at ``smpl_model=``, loaded and
-    checked for a mesh); one UsageError naming the fix for an unknown value, a missing or unusable model file."""
+def render_body(render: str | None, smpl_model: str | Path | None) -> SmplBody | MannequinBody | None:
+    """The body the videos show for ``render=`` (stick: None; body: the mannequin, `body_render.MANNEQUIN`; mesh: the
+    SMPL model at ``smpl_model=``, loaded and checked for a mesh); one UsageError naming the fix for an unknown value,
+    a missing or unusable model file."""
     choice = "stick" if render is None else str(render).strip().lower()
     if choice not in RENDERS:
-        raise UsageError(f"unknown render={render!r}: choose stick (stick-figure videos) or mesh (an SMPL body mesh; "
-                         "needs smpl_model=)")  # fmt: skip
-    if choice == "stick":
+        raise UsageError(f"unknown render={render!r}: choose stick (stick-figure videos), body (a mannequin, no model "
+                         "file) or mesh (an SMPL body mesh; needs smpl_model=)")  # fmt: skip
+    if choice in ("stick", "body"):
         if smpl_model is not None:
             raise UsageError(f"smpl_model={smpl_model} is the body of render=mesh videos: add render=mesh, or drop "
-                             "smpl_model= for stick figures")  # fmt: skip
-        return None
+                             f"smpl_model= for {'stick figures' if choice == 'stick' else 'the mannequin'}")  # fmt: skip
+        return MANNEQUIN if choice == "body" else None
     if smpl_model is None or not str(smpl_model).strip():
         raise UsageError(f"render=mesh draws an SMPL body: {GET_MODEL}")
     try:
@@ -62,7 +64,8 @@ def render_body(render: str | None, smpl_model: str | Path | None) -> SmplBody |
 
 def check_mesh_skeleton(skeleton: Skeleton) -> int:
     """22 or 24 (the SMPL joints of the motion); UsageError for any other skeleton, before anything is generated."""
-    return check_smpl_skeleton(skeleton, "render=mesh", "use render=stick (stick-figure videos) for it")
+    return check_smpl_skeleton(skeleton, "render=mesh", "use render=stick (stick figures) or render=body (a "
+                               "mannequin, any skeleton) for it")  # fmt: skip
 
 
 def smpl_vertices(joints: np.ndarray, skeleton: Skeleton, fps: float, body: SmplBody) -> np.ndarray:

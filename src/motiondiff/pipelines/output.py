@@ -22,7 +22,7 @@ from motiondiff.edit.smoothing import smooth_joints, smoothness_of_joints
 from motiondiff.export.html_viewer import export_html
 from motiondiff.export.naming import motion_stems
 from motiondiff.export.outputs import check_formats_for, export_features, parse_formats
-from motiondiff.export.render import render_motion
+from motiondiff.export.render import VIDEO_SIZE, render_motion
 from motiondiff.export.smpl_mesh import render_body
 from motiondiff.geometry.skeleton import Skeleton
 from motiondiff.runtime.atomic import finite_or_null, save_npy, write_json
@@ -74,6 +74,7 @@ class MotionOutput:
         render: str = "stick",
         smpl_model: str | Path | None = None,
         body=None,
+        video_size: int = VIDEO_SIZE,
         summary: dict | None = None,
         overwrite: bool = False,
     ) -> list[dict]:
@@ -83,12 +84,13 @@ class MotionOutput:
         before and after smoothing, what each clean-up did). The folder is created if needed; formats the skeleton
         cannot take (smpl off SMPL-22/24) are refused before anything is written. ``rig_names``: bone names of the
         bvh/fbx/glb files (smpl or mixamo; None: the skeleton's). ``render="mesh"`` with ``smpl_model=`` (the user's
-        SMPL body model .npz; or an already loaded ``body``) makes the mp4/gif videos show that body's mesh. A folder
+        SMPL body model .npz; or an already loaded ``body``) makes the mp4/gif videos show that body's mesh;
+        ``video_size``: their side in pixels (an even number from 64 to 2160; 720 by default). A folder
         that holds an earlier save (its results.json) or files of these motions' names is refused unless
         ``overwrite``: nothing already there is replaced without asking."""
         formats = parse_formats(list(formats) if not isinstance(formats, str) else formats)
         body = body if body is not None else render_body(render, smpl_model)
-        check_formats_for(formats, self.representation.skeleton, rig_names, body)
+        check_formats_for(formats, self.representation.skeleton, rig_names, body, video_size)
         self._check_finite()
         folder = _output_folder(folder)
         long = self.info.get("long_motion")  # one motion through several prompts: long_<prompts joined by "then">_<k>
@@ -98,15 +100,15 @@ class MotionOutput:
             _refuse_earlier_files(folder, stems)
         title = [(s["start"], str(s["label"])) for s in long["segments"]] if long else None
         if self.edit is not None:
-            rows = save_edits(folder, self, formats, rig_names)
+            rows = save_edits(folder, self, formats, rig_names, video_size=video_size)
         else:
-            rows = [self._save_one(folder / stem, i, names[:i].count(names[i]), title, formats, rig_names, body)
-                    for i, stem in enumerate(stems)]  # fmt: skip
+            rows = [self._save_one(folder / stem, i, names[:i].count(names[i]), title, formats, rig_names, body,
+                                   video_size) for i, stem in enumerate(stems)]  # fmt: skip
         doc = {**(summary or {}), "info": self.info, "samples": rows}
         write_json(folder / "results.json", finite_or_null(doc), default=str)
         return rows
 
-    def _save_one(self, stem: Path, i: int, index: int, title, formats, rig_names, body) -> dict:
+    def _save_one(self, stem: Path, i: int, index: int, title, formats, rig_names, body, video_size) -> dict:
         """Motion ``i``'s files and results row; ``index``: its number among its prompt's motions (the stem's _k)."""
         joints, feats, prompt = self.joints[i], self.features[i], self.prompts[i]
         changed = self._changed(i)
@@ -116,7 +118,8 @@ class MotionOutput:
         save_npy(f"{stem}_joints.npy", joints.astype(np.float32))
         save_npy(f"{stem}_features.npy", np.asarray(feats, dtype=np.float32))
         exports = export_features(stem, self.representation, feats, self.fps, formats, title=title or prompt or
-                                  "unconditioned", joints=changed, rig_names=rig_names, body=body)  # fmt: skip
+                                  "unconditioned", joints=changed, rig_names=rig_names, body=body,
+                                  video_size=video_size)  # fmt: skip
         measured, smoothing = self._measured(i, raw)
         per_motion = self.info.get("per_motion") or [{}] * len(self)
         return {"prompt": prompt, "index": index, "frames": len(joints), "joints": f"{stem}_joints.npy",
@@ -190,13 +193,14 @@ class MotionOutput:
             return html
         return HTML(html)
 
-    def gif(self, i: int = 0, dpi: int = 60):
-        """Motion ``i`` as an animated GIF for a notebook (an IPython Image; the GIF bytes in plain Python). Unlike
-        ``show``'s interactive viewer, an image output stays in a saved notebook and shows on code hosts."""
+    def gif(self, i: int = 0, size: int = 240):
+        """Motion ``i`` as an animated GIF for a notebook (an IPython Image; the GIF bytes in plain Python), ``size``
+        pixels square: small by default, as a saved notebook keeps it. Unlike ``show``'s interactive viewer, an image
+        output stays in a saved notebook and shows on code hosts."""
         i = self._index(i)
         with tempfile.TemporaryDirectory() as tmp:
             data = render_motion(self.joints[i], self.skeleton, Path(tmp) / "motion.gif", title=self.prompts[i] or "",
-                                 fps=self.fps, dpi=dpi).read_bytes()  # fmt: skip
+                                 fps=self.fps, size=size).read_bytes()  # fmt: skip
         try:
             from IPython.display import Image
         except ImportError:

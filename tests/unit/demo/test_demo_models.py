@@ -3,12 +3,18 @@ drives the page). Input checks run before any model is loaded; one real generati
 
 from __future__ import annotations
 
+import zipfile
+
 import numpy as np
 import pytest
 
-from motiondiff.demo.models import DemoModels, generate, parse_weights, released_choices
+from motiondiff.demo.models import DemoModels, released_choices
+from motiondiff.demo.modes.generate import generate
+from motiondiff.demo.requests import run_request
 from motiondiff.model_files.resolve import SHIPPED_MODELS
 from motiondiff.runtime.errors import UsageError
+
+VIDEO = 128  # pixels: the smallest videos keep these tests quick
 
 
 def test_released_models_are_offered_and_guidedmotion_only_with_a_checkpoint(tmp_path):
@@ -27,49 +33,51 @@ def test_released_models_are_offered_and_guidedmotion_only_with_a_checkpoint(tmp
 
 
 @pytest.mark.parametrize(
-    "text, expect", [(None, None), ("  ", None), ("2, 0.5", [2.0, 0.5]), ("1;0", [1.0, 0.0]), ("3", [3.0])]
-)
-def test_local_action_weights(text, expect):
-    assert parse_weights(text) == expect
-
-
-def test_bad_weights_are_a_usage_error():
-    with pytest.raises(UsageError, match="numbers separated by commas"):
-        parse_weights("2, lots")
-
-
-@pytest.mark.parametrize(
     "field, value, message",
     [("num_samples", 5, "number of samples must be a whole number in 1..4"), ("num_samples", 1.5, "whole number"),
      ("seed", -1, "seed must be"), ("steps", 0, "steps must be"), ("steps", "x", "steps must be a whole number")],
 )  # fmt: skip
-def test_page_numbers_are_checked_before_any_model_loads(tmp_path, field, value, message):
+def test_page_numbers_are_checked_before_any_model_loads(field, value, message):
     models = DemoModels()
     kwargs = {"seconds": 2.0, "num_samples": 1, "seed": 0, "steps": 5, field: value}
     with pytest.raises(UsageError, match=message):
-        generate(models, "text", "a person walks", tmp_path, **kwargs)
+        generate(models, "text", "a person walks", **kwargs)
     assert not models._loaded
 
 
 @pytest.fixture(scope="module")
 def action_models():
-    models = DemoModels()
+    models = DemoModels(blender=False)
     assert models.info("action").kind == "action"
     return models
 
 
-def test_action_model_generates_viewer_video_bvh_and_npz(action_models, tmp_path):
+def test_the_action_model_offers_its_actions_as_examples(action_models):
     info = action_models.info("action")
-    assert "walk" in info.actions and info.max_seconds == 6.0
-    out, samples = generate(action_models, "action", "walk", tmp_path, seconds=0.5, num_samples=2, steps=2, seed=3)
-    assert [s.index for s in samples] == [0, 1] and out.prompts == ["walk", "walk"]
+    assert "walk" in info.actions and info.max_seconds == 6.0 and info.examples == info.actions
+    assert not info.checks_coverage  # coverage is a text model's
+    assert all(len(t.splitlines()) == 3 and set(line.split(" : ")[0] for line in t.splitlines()) <= set(info.actions)
+               for t in info.timelines)  # fmt: skip
+
+
+def test_a_request_writes_viewer_video_bvh_npz_and_a_zip(action_models, tmp_path):
+    def make():
+        return generate(action_models, "action", "walk", seconds=0.5, num_samples=2, steps=2, seed=3)
+
+    result = run_request(action_models, tmp_path, "run", make, video_size=VIDEO)
+    out, samples = result.out, result.samples
+    assert [s.index for s in samples] == [0, 1] and out.prompts == ["walk", "walk"] and result.coverage == []
     for s in samples:
-        assert s.html.read_text().count("Plotly.newPlot") >= 1 and s.mp4.stat().st_size > 1000
-        assert s.bvh.read_text().startswith("HIERARCHY")
+        assert 'class="motion-data"' in s.html.read_text() and s.mp4.stat().st_size > 1000
+        assert s.bvh.read_text().startswith("HIERARCHY") and s.fbx is None and s.glb is None
         npz = np.load(s.npz)
         np.testing.assert_array_equal(npz["joints"], out.joints[s.index])
         np.testing.assert_array_equal(npz["features"], out.features[s.index])
         assert float(npz["fps"]) == out.fps == 20.0 and npz["joints"].shape == (10, 22, 3)
+        assert s.downloads() == [s.bvh, s.npz]
+    names = zipfile.ZipFile(result.zip).namelist()
+    assert {s.bvh.name for s in samples} | {s.npz.name for s in samples} | {s.mp4.name for s in samples} <= set(names)
+    assert "results.json" in names and result.zip.parent.parent == tmp_path  # in the request's own folder
     assert action_models.get("action") is action_models.get("action")  # loaded once
 
 
@@ -77,6 +85,6 @@ def test_action_model_generates_viewer_video_bvh_and_npz(action_models, tmp_path
     "prompt, seconds, message",
     [("", 2.0, "choose an action"), ("fly", 2.0, "fly"), ("walk", 60.0, "longer than this model's maximum")],
 )
-def test_action_model_bad_input_is_a_usage_error(action_models, tmp_path, prompt, seconds, message):
+def test_action_model_bad_input_is_a_usage_error(action_models, prompt, seconds, message):
     with pytest.raises(UsageError, match=message):
-        generate(action_models, "action", prompt, tmp_path, seconds=seconds, steps=2)
+        generate(action_models, "action", prompt, seconds=seconds, steps=2)

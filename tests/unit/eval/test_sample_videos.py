@@ -65,6 +65,9 @@ def test_settings_from_config():
         SampleVideos.from_config({"seconds": "long"})
     with pytest.raises(UsageError, match=r"videos\.frames is not a setting; the settings are prompts, actions"):
         SampleVideos.from_config({"frames": 40})
+    assert SampleVideos().size == 160  # small: logged at every evaluation
+    with pytest.raises(UsageError, match=r"videos\.size=161: .*even whole number from 64 to 2160"):
+        SampleVideos.from_config({"size": 161})
 
 
 def test_conditions_fit_the_model():

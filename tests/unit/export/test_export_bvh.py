@@ -131,7 +131,8 @@ def test_real_clip_features_round_trip(val, tmp_path, name):
 def test_export_motion_writes_every_format(val, tmp_path):
     _, clips = val
     joints = clips[0].joints[:4]
-    paths = export_motion(tmp_path / "walk.v1", joints, SMPL22, 20, ["npy", "bvh", "html", "gif", "npy"], title="t")
+    formats = ["npy", "bvh", "html", "gif", "npy"]
+    paths = export_motion(tmp_path / "walk.v1", joints, SMPL22, 20, formats, title="t", video_size=120)
     assert list(paths) == ["npy", "bvh", "html", "gif"]
     assert {p.name for p in tmp_path.iterdir()} == {"walk.v1.npy", "walk.v1.bvh", "walk.v1.html", "walk.v1.gif"}
     np.testing.assert_array_equal(np.load(paths["npy"]), joints)

@@ -26,16 +26,19 @@ LIMB_COLOURS = ((0x1F, 0x77, 0xB4), (0xD6, 0x27, 0x28), (0x33, 0x33, 0x33))
 
 
 def body_fill(joints: np.ndarray, frame: int) -> float:
-    """Height of the box around the limb-coloured pixels of one rendered frame / the frame's height."""
+    """Height of the box around the limb-coloured pixels of one rendered frame / the frame's height (the legend's
+    corner, in the limb colours too, left out)."""
     import matplotlib.pyplot as plt
 
-    anim = stick_figure_animation(joints, SMPL22)
+    anim = stick_figure_animation(joints, SMPL22, size=320)
     anim._func(frame)
     buf = io.BytesIO()
-    anim._fig.savefig(buf, format="png", dpi=80)
+    anim._fig.savefig(buf, format="png", dpi=anim._fig.dpi)
+    legend = anim._fig.legends[0].get_window_extent()  # pixels from the lower left
     plt.close(anim._fig)
     buf.seek(0)
-    image = plt.imread(buf)[..., :3]
+    image = plt.imread(buf)[..., :3].copy()
+    image[image.shape[0] - int(np.ceil(legend.y1)) :, : int(np.ceil(legend.x1))] = 1.0
     mask = np.zeros(image.shape[:2], bool)
     for colour in LIMB_COLOURS:
         mask |= np.abs(image - np.array(colour) / 255).max(-1) < 0.12
@@ -74,7 +77,7 @@ def test_a_long_motion_title_follows_the_segment(tmp_path):
     segments = [(0, "a person walks"), (20, "a person waves")]
     assert [title_at(segments, i) for i in (0, 19, 20, 39)] == ["a person walks"] * 2 + ["a person waves"] * 2
     assert title_at("one prompt", 7) == "one prompt"
-    path = render_motion(glide(0, 1.0, frames=40), SMPL22, tmp_path / "long.gif", title=segments, fps=20)
+    path = render_motion(glide(0, 1.0, frames=40), SMPL22, tmp_path / "long.gif", title=segments, fps=20, size=120)
     from PIL import Image
 
     assert Image.open(path).n_frames == 40

@@ -1,0 +1,36 @@
+"""Edit mode: regenerate body parts of a motion from a prompt and keep the rest of the body. ``parts`` names the parts
+that are REGENERATED, as `edit.py parts=` and `MotionPipeline.edit_parts(parts=)` do."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from motiondiff.demo.inputs import steps_of, whole
+from motiondiff.demo.models import MAX_SAMPLES, DemoModels
+from motiondiff.pipelines import MotionOutput
+from motiondiff.runtime.errors import UsageError
+
+
+def edit_parts(
+    models: DemoModels,
+    key: str,
+    motion: MotionOutput | str,
+    prompt: str | None,
+    parts,
+    *,
+    seed: int = 0,
+    steps: int | None = None,
+    guidance: float | None = None,
+    num_samples: int = 1,
+) -> MotionOutput:
+    """``num_samples`` edits of ``motion`` (one motion, or a file path) with ``parts`` regenerated from ``prompt``."""
+    pipe = models.mdm(key, "body-part editing")
+    if not parts:
+        raise UsageError(
+            f"choose the body parts to regenerate: {', '.join(sorted(pipe.model.representation.skeleton.parts))}"
+        )
+    out = pipe.edit_parts(motion, prompt or None, parts=parts if isinstance(parts, str) else list(parts),
+                          num_samples=whole(num_samples, "number of samples", 1, MAX_SAMPLES),
+                          seed=whole(seed, "seed", 0, 2**63 - 1), sampler="ddim", steps=steps_of(steps),
+                          guidance=guidance)  # fmt: skip
+    return replace(out, edit=None)  # saved as plain motions: the page shows the edits, not the input again
