@@ -6,10 +6,7 @@ line and exit code 2."""
 from __future__ import annotations
 
 from motiondiff.cli import validate
-from motiondiff.cli.demo import main
-from motiondiff.cli.edit import run as edit_run
 from motiondiff.cli.prompt_inputs import check_prompt_inputs
-from motiondiff.cli.sample import run as mdm
 from motiondiff.model_files.file_checks import check_model_file
 from motiondiff.model_files.resolve import find_model
 from motiondiff.runtime.hardware import resolve_device
@@ -60,6 +57,7 @@ def sample() -> None:
 
         check_prompt_inputs(cfg)
         _before_model(cfg, "action" if cfg.get("action") is not None else "text")
+        from motiondiff.cli.sample import run as mdm  # lazy: lightning, the pipelines (+4.4 s to import)
 
         return mdm(cfg)
 
@@ -67,7 +65,12 @@ def sample() -> None:
 
 
 def edit() -> None:
-    _checked("edit", validate.RULES_EDIT, lambda: edit_run)
+    def command():
+        from motiondiff.cli.edit import run  # lazy: lightning, the pipelines (+4.4 s to import)
+
+        return run
+
+    _checked("edit", validate.RULES_EDIT, command)
 
 
 def evaluate() -> None:
@@ -98,5 +101,6 @@ def train_evaluator() -> None:
 
 
 def demo() -> None:
+    from motiondiff.cli.demo import main  # lazy: gradio, the pipelines (+8 s to import)
 
     main()

@@ -14,8 +14,6 @@ import math
 import re
 from pathlib import Path
 
-from motiondiff.lit.motion_diffusion import MotionDiffusion
-from motiondiff.lit.vae import MotionVAEModule  # lazy: lightning (+4.4 s to import)
 from motiondiff.model_files.resolve import RELEASE_SUFFIXES
 from motiondiff.models.hierarchical import LEVELS
 from motiondiff.runtime.checked_loading import reading
@@ -141,6 +139,7 @@ def _keys_problem(unknown: list, missing: list, allowed) -> str:
 
 
 def _check_hparams(h: dict, where: str) -> None:
+    from motiondiff.lit.motion_diffusion import MotionDiffusion  # lazy: lightning (+4.4 s): a refusal stays quick
 
     _check_keys(h, MotionDiffusion, where)
 
@@ -210,6 +209,8 @@ def _check_latent_hparams(h: dict, where: str) -> None:
             fail(key, "an object")
     if not _is_int(h["node_dim"]) or h["node_dim"] < 1:
         fail("node_dim", "an integer >= 1")
+    from motiondiff.lit.vae import MotionVAEModule  # lazy: lightning (+4.4 s to import)
+
     for level in LEVELS:
         vae = h["vaes"].get(level)
         if not isinstance(vae, dict):
