@@ -15,6 +15,7 @@ from pathlib import Path
 import gradio as gr
 
 from motiondiff.demo.files import blender_note
+from motiondiff.demo.inputs import Sampling
 from motiondiff.demo.models import DemoModels
 from motiondiff.demo.modes.edit import edit_parts
 from motiondiff.demo.modes.generate import generate
@@ -80,8 +81,8 @@ class Handlers:
         prompt = prompt_of(self.models, key, text, action)
 
         def make():
-            return generate(self.models, key, prompt, seconds=secs, guidance=guidance, seed=seed, num_samples=count,
-                            steps=n_steps, weights=weights)  # fmt: skip
+            sampling = Sampling.from_page(seed, n_steps, guidance, count)
+            return generate(self.models, key, prompt, seconds=secs, sampling=sampling, weights=weights)
 
         def describe(r: Result) -> str:
             line = f"Generated {len(r.samples)} motion(s) of {prompt!r} with `{key}` ({settings_line(r.out)})."
@@ -98,8 +99,8 @@ class Handlers:
 
         def make():
             motion = motion_source(source, last, sample, upload)
-            return edit_parts(self.models, key, motion, prompt, parts, seed=seed, steps=n_steps, guidance=guidance,
-                              num_samples=count)  # fmt: skip
+            sampling = Sampling.from_page(seed, n_steps, guidance, count)
+            return edit_parts(self.models, key, motion, prompt, parts, sampling=sampling)
 
         def describe(r: Result) -> str:
             named = parts if isinstance(parts, str) else ", ".join(parts)
@@ -114,8 +115,9 @@ class Handlers:
 
         def make():
             motion = motion_source(source, last, sample, upload)
-            return inbetween(self.models, key, motion, prompt, keep_start=keep_start, keep_end=keep_end, seed=seed,
-                             steps=n_steps, guidance=guidance, num_samples=count)  # fmt: skip
+            sampling = Sampling.from_page(seed, n_steps, guidance, count)
+            return inbetween(self.models, key, motion, prompt, keep_start=keep_start, keep_end=keep_end,
+                             sampling=sampling)  # fmt: skip
 
         def describe(r: Result) -> str:
             info, frames = r.out.info, len(r.out.joints[0])
@@ -128,8 +130,8 @@ class Handlers:
 
     def on_timeline(self, key, lines, secs, guidance, seed, count, n_steps, video_size):
         def make():
-            return timeline(self.models, key, lines, seconds=secs, seed=seed, steps=n_steps, guidance=guidance,
-                            num_samples=count)  # fmt: skip
+            sampling = Sampling.from_page(seed, n_steps, guidance, count)
+            return timeline(self.models, key, lines, seconds=secs, sampling=sampling)
 
         def describe(r: Result) -> str:
             parts = segments(r.out)

@@ -1,9 +1,12 @@
-"""The demo page's own inputs read and checked: whole numbers (Gradio numbers arrive as floats), GuidedMotion's
-local-action weights, the prompt of a text or an action model, the kept share of an in-between and the lines of a
+"""The demo page's own inputs read and checked: whole numbers (Gradio numbers arrive as floats), the sampling
+settings every mode shares, GuidedMotion's local-action weights, the kept share of an in-between and the lines of a
 timeline. Each mistake is one UsageError that names the fix; no web code here."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+from motiondiff.demo.models import MAX_SAMPLES
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.prompt_text import split_time
 
@@ -22,6 +25,31 @@ def whole(value, name: str, low: int, high: int) -> int:
 def steps_of(value) -> int | None:
     """The sampler steps box: empty means the model's default."""
     return None if value in (None, "") else whole(value, "steps", 1, 10_000)
+
+
+@dataclass(frozen=True)
+class Sampling:
+    """The sampling settings of every mode: ``num_samples`` motions from ``seed`` with DDIM ``steps`` and
+    ``guidance`` (None: the model's defaults). `from_page` reads and checks the page's boxes once."""
+
+    seed: int = 0
+    steps: int | None = None
+    guidance: float | None = None
+    num_samples: int = 1
+
+    @classmethod
+    def from_page(cls, seed=0, steps=None, guidance=None, num_samples=1) -> Sampling:
+        """The settings as the page's boxes give them (floats for whole numbers, an empty steps box)."""
+        return cls(whole(seed, "seed", 0, 2**63 - 1), steps_of(steps), guidance,
+                   whole(num_samples, "number of samples", 1, MAX_SAMPLES))  # fmt: skip
+
+    def ddim(self) -> dict:
+        """The keywords of the `MotionPipeline` calls (`__call__`, `edit_parts`, `inbetween`, `long`): DDIM."""
+        return {"num_samples": self.num_samples, "seed": self.seed, "sampler": "ddim", "steps": self.steps,
+                "guidance": self.guidance}  # fmt: skip
+
+
+DEFAULT_SAMPLING = Sampling()  # one motion from seed 0 with the model's own steps and guidance
 
 
 def parse_weights(text: str | None) -> list[float] | None:

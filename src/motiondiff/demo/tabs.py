@@ -4,6 +4,7 @@ components by name."""
 
 from __future__ import annotations
 
+import contextlib
 from types import SimpleNamespace
 
 import gradio as gr
@@ -22,33 +23,37 @@ def generate_tab() -> SimpleNamespace:
     return SimpleNamespace(button=button)
 
 
-def edit_tab(info: ModelInfo) -> SimpleNamespace:
-    with gr.Tab("Edit body parts", elem_id="tab-edit"):
-        gr.Markdown("Regenerate the chosen body parts from the prompt and keep the rest of the body as it was, over "
-                    "every frame (as `edit.py kind=parts parts=...`).")  # fmt: skip
+@contextlib.contextmanager
+def source_tab(title: str, prefix: str, default_source: str, note: str):
+    """A tab (``tab-<prefix>``) that starts from a motion: its ``note``, the "start from" inputs, and a column the
+    block fills with the mode's own inputs; yields the tab's components by name, for the block to add to."""
+    with gr.Tab(title, elem_id=f"tab-{prefix}"):
+        gr.Markdown(note)
         with gr.Row():
-            source, sample, upload = motion_source_inputs("edit", ON_PAGE)
+            source, sample, upload = motion_source_inputs(prefix, default_source)
             with gr.Column(scale=2, min_width=240):
-                parts = gr.Dropdown(info.parts, value=["upper_body"] if "upper_body" in info.parts else None,
-                                    multiselect=True, label="parts to regenerate (the rest of the body is kept)",
-                                    elem_id="parts")  # fmt: skip
-                button = gr.Button("Regenerate these parts", variant="primary", elem_id="edit")
-    return SimpleNamespace(source=source, sample=sample, upload=upload, parts=parts, button=button)
+                yield SimpleNamespace(source=source, sample=sample, upload=upload)
+
+
+def edit_tab(info: ModelInfo) -> SimpleNamespace:
+    note = ("Regenerate the chosen body parts from the prompt and keep the rest of the body as it was, over every "
+            "frame (as `edit.py kind=parts parts=...`).")  # fmt: skip
+    with source_tab("Edit body parts", "edit", ON_PAGE, note) as tab:
+        tab.parts = gr.Dropdown(info.parts, value=["upper_body"] if "upper_body" in info.parts else None,
+                                multiselect=True, label="parts to regenerate (the rest of the body is kept)",
+                                elem_id="parts")  # fmt: skip
+        tab.button = gr.Button("Regenerate these parts", variant="primary", elem_id="edit")
+    return tab
 
 
 def inbetween_tab() -> SimpleNamespace:
-    with gr.Tab("In-between", elem_id="tab-inbetween"):
-        gr.Markdown("Keep the start and the end of a motion (your BVH) and generate the frames between from the "
-                    "prompt; the result is as long as the motion.")  # fmt: skip
-        with gr.Row():
-            source, sample, upload = motion_source_inputs("inbetween", UPLOADED)
-            with gr.Column(scale=2, min_width=240):
-                keep_start = named_slider(0, 50, value=25, step=1, label="kept start (% of frames)",
-                                          elem_id="keep-start")  # fmt: skip
-                keep_end = named_slider(0, 50, value=25, step=1, label="kept end (% of frames)", elem_id="keep-end")
-                button = gr.Button("Generate the frames between", variant="primary", elem_id="inbetween")
-    return SimpleNamespace(source=source, sample=sample, upload=upload, keep_start=keep_start, keep_end=keep_end,
-                           button=button)  # fmt: skip
+    note = ("Keep the start and the end of a motion (your BVH) and generate the frames between from the prompt; the "
+            "result is as long as the motion.")  # fmt: skip
+    with source_tab("In-between", "inbetween", UPLOADED, note) as tab:
+        tab.keep_start = named_slider(0, 50, value=25, step=1, label="kept start (% of frames)", elem_id="keep-start")
+        tab.keep_end = named_slider(0, 50, value=25, step=1, label="kept end (% of frames)", elem_id="keep-end")
+        tab.button = gr.Button("Generate the frames between", variant="primary", elem_id="inbetween")
+    return tab
 
 
 def timeline_tab(info: ModelInfo) -> SimpleNamespace:

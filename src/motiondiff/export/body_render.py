@@ -2,17 +2,14 @@
 skeleton, so a body shows without the licence-restricted SMPL model and on any skeleton (SMPL-22, KIT-21, a BVH rig).
 
 The mannequin is sized on the motion's own bone lengths (`fit_rest_offsets`) and posed from its joints directly (no
-IK), then drawn by `mesh_render` with the camera, ground, trail and titles of the other videos.
+IK). This module gives only its mesh: `export.outputs` draws it as it draws the SMPL body, with `mesh_render`'s
+camera, ground, trail, titles and video writers.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from motiondiff.export.mesh_render import render_mesh
-from motiondiff.export.render import VIDEO_SIZE, Title
 from motiondiff.geometry.inverse_kinematics import fit_rest_offsets
 from motiondiff.geometry.mannequin import build_mannequin
 from motiondiff.geometry.skeleton import Skeleton
@@ -33,20 +30,3 @@ def mannequin_mesh(joints: np.ndarray, skeleton: Skeleton) -> tuple[np.ndarray, 
     joints = np.asarray(joints, dtype=np.float64)
     mannequin = build_mannequin(skeleton, fit_rest_offsets(joints, skeleton))
     return mannequin.at(joints), mannequin.faces
-
-
-def render_mannequin(
-    joints: np.ndarray,
-    skeleton: Skeleton,
-    path: str | Path,
-    title: Title = "",
-    fps: float = 20.0,
-    *,
-    size: int = VIDEO_SIZE,
-    frame_step: int = 1,
-) -> Path:
-    """Animate the mannequin of joints (N, J, 3) (metres, y up) to `path` (.mp4 or .gif), ``size`` pixels square,
-    every ``frame_step``-th frame at the motion's own speed."""
-    vertices, faces = mannequin_mesh(joints, skeleton)
-    return render_mesh(vertices, faces, path, title, fps, frame_step=frame_step, joints=joints, skeleton=skeleton,
-                       size=size)  # fmt: skip

@@ -21,6 +21,7 @@ from motiondiff.demo.files import (
     write_samples,
     zip_folder,
 )
+from motiondiff.demo.inputs import Sampling
 from motiondiff.demo.models import DemoModels
 from motiondiff.demo.modes.generate import generate
 from motiondiff.export import blender as export_blender
@@ -63,7 +64,7 @@ def test_downloads_list_fbx_and_glb_only_when_there_are_some():
 
 @pytest.fixture(scope="module")
 def walks():
-    return generate(DemoModels(blender=False), "action", "walk", seconds=0.5, num_samples=2, steps=2)
+    return generate(DemoModels(blender=False), "action", "walk", seconds=0.5, sampling=Sampling(steps=2, num_samples=2))
 
 
 def test_each_motion_gets_an_fbx_and_a_glb_from_its_bvh_when_blender_is_there(monkeypatch, walks, tmp_path):

@@ -1,7 +1,7 @@
-"""The demo's own inputs and example prompts, without a model: the timeline box and the in-between shares read as the
-API takes them (mistakes are one UsageError with the fix); example prompts come from the model's training
-vocabulary (its coverage bank's actions through the caption phrases, an action model's names), with a fallback; the
-request collects prompt-coverage warnings and passes other warnings on."""
+"""The demo's own inputs and example prompts, without a model: the sampling settings, the timeline box and the
+in-between shares read as the API takes them (mistakes are one UsageError with the fix); example prompts come from
+the model's training vocabulary (its coverage bank's actions through the caption phrases, an action model's names),
+with a fallback; the request collects prompt-coverage warnings and passes other warnings on."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 
 from motiondiff.data.preparing.captions import CONTENT_PHRASES
 from motiondiff.demo.examples import FALLBACK, example_prompts, example_timelines
-from motiondiff.demo.inputs import parse_weights, share, timeline_items, whole
+from motiondiff.demo.inputs import Sampling, parse_weights, share, timeline_items, whole
 from motiondiff.demo.requests import coverage_warnings
 from motiondiff.pipelines.coverage import PromptCoverageWarning
 from motiondiff.runtime.errors import UsageError
@@ -35,6 +35,23 @@ def test_whole_numbers_from_the_page():
     for bad in (1.5, -1, "x", None):
         with pytest.raises(UsageError, match="seed must be a whole number"):
             whole(bad, "seed", 0, 10)
+
+
+def test_sampling_settings_are_read_from_the_page_once():
+    sampling = Sampling.from_page(seed=3.0, steps="", guidance=2.5, num_samples=2.0)  # as Gradio sends them
+    assert sampling == Sampling(seed=3, steps=None, guidance=2.5, num_samples=2) and isinstance(sampling.seed, int)
+    assert sampling.ddim() == {"num_samples": 2, "seed": 3, "sampler": "ddim", "steps": None, "guidance": 2.5}
+    assert Sampling.from_page(steps=7.0).steps == 7
+
+
+@pytest.mark.parametrize(
+    "field, value, message",
+    [("num_samples", 5, "number of samples must be a whole number in 1..4"), ("num_samples", 1.5, "whole number"),
+     ("seed", -1, "seed must be"), ("steps", 0, "steps must be"), ("steps", "x", "steps must be a whole number")],
+)  # fmt: skip
+def test_bad_sampling_settings_are_a_usage_error(field, value, message):
+    with pytest.raises(UsageError, match=message):
+        Sampling.from_page(**{"seed": 0, "steps": 5, "num_samples": 1, field: value})
 
 
 def test_timeline_lines_become_timed_prompts():

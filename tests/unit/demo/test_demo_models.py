@@ -1,5 +1,5 @@
-"""The demo's model list, its input checks and what one generation writes (no browser: tests/e2e/test_demo.py
-drives the page). Input checks run before any model is loaded; one real generation uses the shipped action model."""
+"""The demo's model list, an action model's input checks and what one generation writes (no browser:
+tests/e2e/test_demo.py drives the page); one real generation uses the shipped action model."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import zipfile
 import numpy as np
 import pytest
 
+from motiondiff.demo.inputs import Sampling
 from motiondiff.demo.models import DemoModels, released_choices
 from motiondiff.demo.modes.generate import generate
 from motiondiff.demo.requests import run_request
@@ -32,19 +33,6 @@ def test_released_models_are_offered_and_guidedmotion_only_with_a_checkpoint(tmp
         models.choice("nope")
 
 
-@pytest.mark.parametrize(
-    "field, value, message",
-    [("num_samples", 5, "number of samples must be a whole number in 1..4"), ("num_samples", 1.5, "whole number"),
-     ("seed", -1, "seed must be"), ("steps", 0, "steps must be"), ("steps", "x", "steps must be a whole number")],
-)  # fmt: skip
-def test_page_numbers_are_checked_before_any_model_loads(field, value, message):
-    models = DemoModels()
-    kwargs = {"seconds": 2.0, "num_samples": 1, "seed": 0, "steps": 5, field: value}
-    with pytest.raises(UsageError, match=message):
-        generate(models, "text", "a person walks", **kwargs)
-    assert not models._loaded
-
-
 @pytest.fixture(scope="module")
 def action_models():
     models = DemoModels(blender=False)
@@ -62,7 +50,7 @@ def test_the_action_model_offers_its_actions_as_examples(action_models):
 
 def test_a_request_writes_viewer_video_bvh_npz_and_a_zip(action_models, tmp_path):
     def make():
-        return generate(action_models, "action", "walk", seconds=0.5, num_samples=2, steps=2, seed=3)
+        return generate(action_models, "action", "walk", seconds=0.5, sampling=Sampling(seed=3, steps=2, num_samples=2))
 
     result = run_request(action_models, tmp_path, "run", make, video_size=VIDEO)
     out, samples = result.out, result.samples
@@ -87,4 +75,4 @@ def test_a_request_writes_viewer_video_bvh_npz_and_a_zip(action_models, tmp_path
 )
 def test_action_model_bad_input_is_a_usage_error(action_models, prompt, seconds, message):
     with pytest.raises(UsageError, match=message):
-        generate(action_models, "action", prompt, seconds=seconds, steps=2)
+        generate(action_models, "action", prompt, seconds=seconds, sampling=Sampling(steps=2))

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from motiondiff.demo.inputs import steps_of, whole
-from motiondiff.demo.models import MAX_SAMPLES, DemoModels
+from motiondiff.demo.inputs import DEFAULT_SAMPLING, Sampling
+from motiondiff.demo.models import DemoModels
 from motiondiff.pipelines import MotionOutput
 from motiondiff.runtime.errors import UsageError
 
@@ -18,19 +18,15 @@ def edit_parts(
     prompt: str | None,
     parts,
     *,
-    seed: int = 0,
-    steps: int | None = None,
-    guidance: float | None = None,
-    num_samples: int = 1,
+    sampling: Sampling = DEFAULT_SAMPLING,
 ) -> MotionOutput:
-    """``num_samples`` edits of ``motion`` (one motion, or a file path) with ``parts`` regenerated from ``prompt``."""
+    """``sampling.num_samples`` edits of ``motion`` (one motion, or a file path) with ``parts`` regenerated from
+    ``prompt``."""
     pipe = models.mdm(key, "body-part editing")
     if not parts:
         raise UsageError(
             f"choose the body parts to regenerate: {', '.join(sorted(pipe.model.representation.skeleton.parts))}"
         )
     out = pipe.edit_parts(motion, prompt or None, parts=parts if isinstance(parts, str) else list(parts),
-                          num_samples=whole(num_samples, "number of samples", 1, MAX_SAMPLES),
-                          seed=whole(seed, "seed", 0, 2**63 - 1), sampler="ddim", steps=steps_of(steps),
-                          guidance=guidance)  # fmt: skip
+                          **sampling.ddim())  # fmt: skip
     return replace(out, edit=None)  # saved as plain motions: the page shows the edits, not the input again

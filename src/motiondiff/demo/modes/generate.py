@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from motiondiff.demo.inputs import parse_weights, steps_of, whole
-from motiondiff.demo.models import MAX_SAMPLES, DemoModels
+from motiondiff.demo.inputs import DEFAULT_SAMPLING, Sampling, parse_weights
+from motiondiff.demo.models import DemoModels
 from motiondiff.pipelines import GuidedMotionPipeline, MotionOutput
 from motiondiff.runtime.errors import UsageError
 
@@ -14,23 +14,16 @@ def generate(
     prompt: str | None,
     *,
     seconds: float,
-    guidance: float | None = None,
-    seed: int = 0,
-    num_samples: int = 1,
-    steps: int | None = None,
+    sampling: Sampling = DEFAULT_SAMPLING,
     weights: str | None = None,
 ) -> MotionOutput:
-    """Sample ``prompt`` with model ``key``: DDIM with ``steps`` (GuidedMotion: per level), ``guidance`` (None: the
-    model's default); ``weights``: GuidedMotion's local-action weights as typed ("2, 0.5")."""
-    num_samples = whole(num_samples, "number of samples", 1, MAX_SAMPLES)
-    seed = whole(seed, "seed", 0, 2**63 - 1)
-    steps = steps_of(steps)
+    """Sample ``prompt`` with model ``key`` by ``sampling`` (GuidedMotion: its ``steps`` at each level);
+    ``weights``: GuidedMotion's local-action weights as typed ("2, 0.5")."""
     pipe = models.get(key)
     if isinstance(pipe, GuidedMotionPipeline):
-        level_steps = None if steps is None else (steps, steps, steps)
-        return pipe(prompt, seconds=float(seconds), num_samples=num_samples, guidance=guidance, seed=seed,
-                    level_steps=level_steps, local_weights=parse_weights(weights))  # fmt: skip
+        level_steps = None if sampling.steps is None else (sampling.steps,) * 3
+        return pipe(prompt, seconds=float(seconds), num_samples=sampling.num_samples, guidance=sampling.guidance,
+                    seed=sampling.seed, level_steps=level_steps, local_weights=parse_weights(weights))  # fmt: skip
     if pipe.condition_kind == "action" and (prompt is None or not str(prompt).strip()):
         raise UsageError(f"choose an action: one of {', '.join(pipe.actions)}")
-    return pipe(prompt, seconds=float(seconds), num_samples=num_samples, guidance=guidance, sampler="ddim",
-                steps=steps, seed=seed)  # fmt: skip
+    return pipe(prompt, seconds=float(seconds), **sampling.ddim())

@@ -3,28 +3,18 @@ continues from the end of the one before)."""
 
 from __future__ import annotations
 
-from motiondiff.demo.inputs import steps_of, timeline_items, whole
-from motiondiff.demo.models import MAX_SAMPLES, DemoModels
+from motiondiff.demo.inputs import DEFAULT_SAMPLING, Sampling, timeline_items
+from motiondiff.demo.models import DemoModels
 from motiondiff.pipelines import MotionOutput
 
 
 def timeline(
-    models: DemoModels,
-    key: str,
-    lines: str,
-    *,
-    seconds: float = 2.0,
-    seed: int = 0,
-    steps: int | None = None,
-    guidance: float | None = None,
-    num_samples: int = 1,
+    models: DemoModels, key: str, lines: str, *, seconds: float = 2.0, sampling: Sampling = DEFAULT_SAMPLING
 ) -> MotionOutput:
-    """The timeline box's ``lines`` (``prompt : seconds`` each; ``seconds`` for a line without) as one motion."""
+    """The timeline box's ``lines`` (``prompt : seconds`` each; ``seconds`` for a line without) as one motion per
+    sample."""
     pipe = models.mdm(key, "a timeline")
-    count = whole(num_samples, "number of samples", 1, MAX_SAMPLES)
-    return pipe.long(timeline_items(lines, seconds), num_samples=count,
-                     seed=whole(seed, "seed", 0, 2**63 - 1), sampler="ddim", steps=steps_of(steps),
-                     guidance=guidance)  # fmt: skip
+    return pipe.long(timeline_items(lines, seconds), **sampling.ddim())
 
 
 def segments(out: MotionOutput) -> list[tuple[str, float, float]]:
