@@ -151,18 +151,23 @@ def test_guided_pipeline_from_python(latent_ckpt):
 
 def test_web_demo_offers_guidedmotion_with_a_weight_per_local_action(latent_ckpt, tmp_path):
     """`motiondiff-demo guided=<ckpt>`: the model list gains GuidedMotion, whose weights box reaches the sampler."""
-    from motiondiff.demo.models import DemoModels, generate
+    from motiondiff.demo.inputs import Sampling
+    from motiondiff.demo.models import DemoModels
+    from motiondiff.demo.modes.generate import generate
+    from motiondiff.demo.requests import run_request
     from motiondiff.runtime.errors import UsageError
 
     _, ckpt = latent_ckpt
-    models = DemoModels(guided=ckpt)
+    models = DemoModels(guided=ckpt, blender=False)
     assert models.choices[-1].key == "guided" and models.info("guided").kind == "guided"
-    out, samples = generate(models, "guided", CAPTION, tmp_path, seconds=1.0, steps=2, weights="2, 0.5")
-    assert [a["weight"] for a in out.info["local_actions"]] == [2.0, 0.5]
+    result = run_request(models, tmp_path, "run", lambda: generate(models, "guided", CAPTION, seconds=1.0,
+                         sampling=Sampling(steps=2), weights="2, 0.5"), video_size=160)  # fmt: skip
+    assert [a["weight"] for a in result.out.info["local_actions"]] == [2.0, 0.5]
+    samples = result.samples
     assert len(samples) == 1 and np.load(samples[0].npz)["joints"].shape == (20, 22, 3)
     assert samples[0].bvh.is_file() and samples[0].mp4.is_file() and samples[0].html.is_file()
     with pytest.raises(UsageError, match="one per action"):
-        generate(models, "guided", CAPTION, tmp_path, seconds=1.0, steps=2, weights="1")
+        generate(models, "guided", CAPTION, seconds=1.0, sampling=Sampling(steps=2), weights="1")
 
 
 def test_a_latent_model_releases_as_safetensors_and_samples_like_its_checkpoint(latent_ckpt):
