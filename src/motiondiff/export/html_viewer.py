@@ -111,7 +111,7 @@ def _payload(joints: np.ndarray, skeleton: Skeleton, fps: float, title: Title, t
         "trail": bool(trail),
         "titles": [[0, title]] if isinstance(title, str) else [[int(start), str(text)] for start, text in title],
         "ranges": _fixed_ranges(joints),
-        # matplotlib's azimuth (its x-y plane is our x-z ground), so the camera starts where the videos' does
+        # camera_azimuth's angle in our ground plane, so the camera starts where the videos' does
         "camera": {
             "azimuth": float(np.radians(camera_azimuth(joints, skeleton))),
             "elevation": float(np.radians(_ELEVATION)),

@@ -17,6 +17,7 @@ from motiondiff.export.render import (
     VIDEO_SIZE,
     Title,
     camera_azimuth,
+    to_axes,
     check_video_path,
     draw_ground,
     follow,
@@ -36,7 +37,8 @@ LIGHT_SIDE = -30  # degrees of azimuth off the camera's: the body's side towards
 
 
 def light_direction(azim: float) -> np.ndarray:
-    """Unit vector (our x, y up, z) towards the light, for a camera at matplotlib azimuth `azim` (degrees)."""
+    """Unit vector (our x, y up, z) towards the light, for a camera at azimuth `azim` (degrees in our ground,
+    `render.camera_azimuth`)."""
     e, a = np.radians(LIGHT_ELEVATION), np.radians(azim + LIGHT_SIDE)
     return np.array([np.cos(e) * np.cos(a), np.sin(e), np.cos(e) * np.sin(a)])
 
@@ -69,7 +71,7 @@ def mesh_frames(
     if joints is not None and (np.ndim(joints) != 3 or len(joints) != len(vertices)):
         raise ValueError(f"joints must be (frames, J, 3) for the {len(vertices)} meshes, got {np.shape(joints)}")
     followed = vertices.mean(axis=1, keepdims=True) if joints is None else np.asarray(joints, dtype=np.float64)
-    trail = followed[:, 0, [0, 2]]
+    trail = to_axes(followed[:, 0])[:, :2]
     half = follow_half(vertices)
     azim = camera_azimuth(followed, skeleton if joints is not None else None)
     light = light_direction(azim)
@@ -87,7 +89,7 @@ def mesh_frames(
         ground[:] = draw_ground(ax, trail, i, half, zorder=1)
         triangles = vertices[i][faces]
         colours = shade(triangles, light)
-        body.set_verts(triangles[..., [0, 2, 1]])  # matplotlib's z is our y
+        body.set_verts(to_axes(triangles))
         body.set_facecolor(colours)
         body.set_edgecolor(colours)
         label.set_text(wrap_title(title_at(title, i)))

@@ -63,7 +63,7 @@ def stick_frames(joints: np.ndarray, skeleton: Skeleton, title: Title = "", size
         raise ValueError(f"expected joints (frames, {skeleton.num_joints}, 3), got {joints.shape}")
     fig, ax = video_axes(size)
     side_legend(fig)
-    trail = joints[:, 0, [0, 2]]
+    trail = to_axes(joints[:, 0])[:, :2]
     half = follow_half(joints)
     azim = camera_azimuth(joints, skeleton)
     head = head_joint(skeleton)
@@ -78,11 +78,11 @@ def stick_frames(joints: np.ndarray, skeleton: Skeleton, title: Title = "", size
             ax.text2D(0.5, 0.97, wrap_title(text), transform=ax.transAxes, ha="center", va="top",
                       fontsize=TITLE_POINTS, parse_math=False)  # fmt: skip
         draw_ground(ax, trail, i, half)
-        frame = joints[i]
+        frame = to_axes(joints[i])
         for chain, color in chains:
-            ax.plot(frame[list(chain), 0], frame[list(chain), 2], frame[list(chain), 1], color=color, lw=LIMB_POINTS)
+            ax.plot(*frame[list(chain)].T, color=color, lw=LIMB_POINTS)
         if head is not None:
-            ax.scatter(*frame[head, [0, 2, 1]], s=90, color=_COLORS["torso"], depthshade=False)
+            ax.scatter(*frame[head], s=90, color=_COLORS["torso"], depthshade=False)
         return []
 
     return fig, draw, range(0, len(joints), max(1, int(step)))
@@ -97,9 +97,17 @@ ZOOM = 1.35  # matplotlib's 3D box leaves wide margins at zoom 1
 SIDE_ANGLE = 55  # degrees between the travel (or facing) direction and the camera: front-side, never edge-on
 
 
+def to_axes(points: np.ndarray) -> np.ndarray:
+    """Points (..., 3) in our frame (x, y up, z) as matplotlib's 3D axes take them: (x, -z, y), its x-y plane our
+    ground and its z our up. z is negated because a plain swap (x, z, y) is a reflection: it drew every body mirrored,
+    the left hand where the right one is (the camera in front of a body facing +z showed its left side on the left)."""
+    points = np.asarray(points, dtype=np.float64)
+    return np.stack([points[..., 0], -points[..., 2], points[..., 1]], axis=-1)
+
+
 def camera_azimuth(joints: np.ndarray, skeleton: Skeleton | None) -> float:
-    """matplotlib azimuth (degrees; its x-y plane is our x-z ground) of a camera SIDE_ANGLE off the direction the
-    root (joint 0) travels, or, for motion that stays in place (< 0.5 m), off the direction the body faces in frame
+    """Azimuth (degrees in our x-z ground, from +x towards +z: the camera stands at (cos, sin) of it around the
+    body; `follow` turns it into matplotlib's) of a camera SIDE_ANGLE off the direction the root (joint 0) travels, or, for motion that stays in place (< 0.5 m), off the direction the body faces in frame
     0 (+z when the skeleton is None or has no facing joints)."""
     travel = joints[-1, 0, [0, 2]] - joints[0, 0, [0, 2]]
     if np.linalg.norm(travel) >= 0.5:
@@ -164,9 +172,10 @@ def follow_half(points: np.ndarray) -> float:
 
 
 def follow(ax, azim: float, centre: np.ndarray, half: float) -> None:
-    """Point the camera (ELEVATION, `azim`) at the cube of half side `half` around ground point `centre` (x, z)."""
+    """Point the camera (ELEVATION, our azimuth `azim`) at the cube of half side `half` around the ground point
+    `centre` in the axes' x-y plane (`to_axes`; matplotlib's azimuth runs towards its y, our -z, hence -azim)."""
     ax.set_axis_off()
-    ax.view_init(elev=ELEVATION, azim=azim)
+    ax.view_init(elev=ELEVATION, azim=-azim)
     cx, cz = centre
     ax.set_xlim(cx - half, cx + half)
     ax.set_ylim(cz - half, cz + half)

@@ -25,9 +25,9 @@ matplotlib.use("Agg")
 LIMB_COLOURS = ((0x1F, 0x77, 0xB4), (0xD6, 0x27, 0x28), (0x33, 0x33, 0x33))
 
 
-def body_fill(joints: np.ndarray, frame: int) -> float:
-    """Height of the box around the limb-coloured pixels of one rendered frame / the frame's height (the legend's
-    corner, in the limb colours too, left out)."""
+def limb_pixels(joints: np.ndarray, frame: int) -> dict[tuple, np.ndarray]:
+    """Per limb colour, the mask of its pixels in one rendered frame (the legend's corner, in the limb colours too,
+    left out)."""
     import matplotlib.pyplot as plt
 
     anim = stick_figure_animation(joints, SMPL22, size=320)
@@ -39,11 +39,25 @@ def body_fill(joints: np.ndarray, frame: int) -> float:
     buf.seek(0)
     image = plt.imread(buf)[..., :3].copy()
     image[image.shape[0] - int(np.ceil(legend.y1)) :, : int(np.ceil(legend.x1))] = 1.0
-    mask = np.zeros(image.shape[:2], bool)
-    for colour in LIMB_COLOURS:
-        mask |= np.abs(image - np.array(colour) / 255).max(-1) < 0.12
+    return {colour: np.abs(image - np.array(colour) / 255).max(-1) < 0.12 for colour in LIMB_COLOURS}
+
+
+def body_fill(joints: np.ndarray, frame: int) -> float:
+    """Height of the box around the limb-coloured pixels of one rendered frame / the frame's height."""
+    mask = np.any(list(limb_pixels(joints, frame).values()), axis=0)
     rows = np.where(mask.any(1))[0]
-    return (rows[-1] - rows[0] + 1) / image.shape[0]
+    return (rows[-1] - rows[0] + 1) / mask.shape[0]
+
+
+def test_the_picture_is_not_mirrored():
+    """A body facing +z with its left arm (blue) held out sideways, seen from its front side: the left arm is on
+    the picture's right, as a camera (not a mirror) shows it. A plain (x, z, y) axis swap drew it on the left."""
+    pose = rest_pose()
+    shoulder = pose[16]
+    pose[18], pose[20] = shoulder + [0.3, 0.0, 0.0], shoulder + [0.55, 0.0, 0.0]  # l_elbow, l_wrist out along +x
+    left, right = (limb_pixels(np.repeat(pose[None], 3, axis=0), 0)[c] for c in LIMB_COLOURS[:2])
+    columns = np.arange(left.shape[1])
+    assert (left.sum(0) @ columns) / left.sum() > (right.sum(0) @ columns) / right.sum() + 20
 
 
 @pytest.mark.parametrize("metres", [0.0, 4.0])
