@@ -55,6 +55,8 @@ def _keep_caches_out_of_home(tmp_path_factory):
 LONGEST_FIRST = [  # `--durations` of a `make test` run, 2026-12-06 (DDP and the kill tests shortened since)
     "e2e/test_guidedmotion_cli.py",  # 139
     "e2e/test_notebooks.py",  # 125
+    "hostile/test_issue41_refusals.py",  # ~100 (16 subprocesses; added 2026-12-06)
+    "hostile/test_issue41_runs.py",  # ~100
     "e2e/test_train_sample_cli.py",  # 88
     "hostile/test_boundary.py",  # 71
     "e2e/test_ddp_cli.py",  # ~70
@@ -63,6 +65,8 @@ LONGEST_FIRST = [  # `--durations` of a `make test` run, 2026-12-06 (DDP and the
     "hostile/test_kill_training.py",  # ~60
     "hostile/test_interrupts.py",  # 59
     "e2e/test_edit_cli.py",  # 50
+    "e2e/test_demo.py",  # ~45 (every mode in Chromium)
+    "unit/test_packaging.py",  # ~40 (builds the wheel, installs it in a fresh venv)
     "integration/test_prepare_bandai.py",  # 48
     "e2e/test_dashboard.py",  # 46
     "hostile/test_kill_sampling.py",  # ~42
