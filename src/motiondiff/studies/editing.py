@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from motiondiff.data.representations.spec import bridge_from_spec
 from motiondiff.edit.api import edit_parts, inbetween
@@ -134,7 +135,7 @@ def evaluate_editing(module, *, split, num_edits, num_part_edits, modes, text, p
               "inbetween_inputs_median_smoothness": float(np.median(
                   [smoothness_of_joints(bridge.joints(m.features), skeleton) for m in clips])),
               "low_noise": low_noise_error(module, clips, seed=seed)}  # fmt: skip
-    for mode in modes:
+    for mode in tqdm(modes, desc="editing modes", unit="mode"):
         t0 = time.perf_counter()
         conds = [_clip_condition(module, m) for m in clips]
         if any(c is None for c in conds):

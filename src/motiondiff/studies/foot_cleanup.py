@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from motiondiff.data.formats.prepared import load_split
 from motiondiff.edit.foot_cleanup import clean_foot_skate, foot_sliding
@@ -67,14 +68,22 @@ def study(model: str, text: str, num_samples: int, seconds: float, seed: int, st
     pipe = MotionPipeline.from_pretrained(model)
     out = pipe(text if pipe.condition_kind != "none" else None, seconds=seconds, num_samples=num_samples, seed=seed,
                steps=steps)  # fmt: skip
-    settings = []
-    for sigma in smooth_sigmas:
-        joints = [smooth_joints(j, float(sigma)) if sigma else j for j in out.joints]
-        rows = [measure(j, out.skeleton, out.fps) for j in joints]
-        settings.append({"smooth_sigma": float(sigma), "generated": rows, "generated_mean": average(rows)})
     clips = [c.joints for c in load_split(embedded_data_root(), split).clips() if len(c.joints) >= 3]
     same = clips and clips[0].shape[1] == out.skeleton.num_joints  # the embedded data's SMPL-22 joints
-    real = [measure(c, out.skeleton, out.fps) for c in clips] if same else []
+    settings = []
+    with tqdm(total=len(smooth_sigmas) * len(out.joints) + (len(clips) if same else 0), desc="motions cleaned",
+              unit="motion") as bar:  # fmt: skip
+
+        def measured(j: np.ndarray) -> dict:
+            row = measure(j, out.skeleton, out.fps)
+            bar.update()
+            return row
+
+        for sigma in smooth_sigmas:
+            joints = [smooth_joints(j, float(sigma)) if sigma else j for j in out.joints]
+            rows = [measured(j) for j in joints]
+            settings.append({"smooth_sigma": float(sigma), "generated": rows, "generated_mean": average(rows)})
+        real = [measured(c) for c in clips] if same else []
     return {"model": model, "text": text, "seed": seed, "steps": out.info.get("steps"), "fps": out.fps,
             "num_samples": num_samples, "settings": settings, "real_split": split, "real_clips": len(real),
             "real_mean": average(real) if real else None}  # fmt: skip

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from motiondiff.bench.timing import median_seconds as timed_median
 from motiondiff.eval.report import format_markdown, summarise, write_markdown
@@ -230,11 +231,12 @@ def main(argv: list[str] | None = None) -> int:
     table = graph_table([c for caps in clips.captions for c in caps], pipe.text_encoder)
     timing_only = cfg.timing_only
     rows: dict[str, list[dict]] = {}
-    for r in range(0 if timing_only else settings["replications"]):
+    replications = 0 if timing_only else settings["replications"]
+    for r in tqdm(range(replications), desc="replications", unit="replication", disable=timing_only):
         start = time.perf_counter()
         for name, metrics in replication(pipe, mdm, evaluators, clips, table, r, settings).items():
             rows.setdefault(name, []).append(metrics)
-        print(f"replication {r + 1}/{settings['replications']} in {time.perf_counter() - start:.0f} s", flush=True)
+        tqdm.write(f"replication {r + 1}/{settings['replications']} in {time.perf_counter() - start:.0f} s")
     frames = int(clips.lengths.max())
     times = {"frames": frames, **sampling_times(pipe, mdm, table, clips.captions[0][0], frames, settings)}
     latent_run, mdm_run = training_seconds(latent_path), training_seconds(mdm_path)

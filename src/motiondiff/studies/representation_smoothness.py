@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
 from motiondiff.eval.report import write_markdown
@@ -31,7 +32,7 @@ def representation_smoothness(
 ) -> dict[str, dict]:
     """{representation: {"mean": average over clips, "std": spread over clips, "clips": count, "dims": D}}."""
     out = {}
-    for name in names:
+    for name in tqdm(names, desc="representations", unit="representation"):
         dm = PreparedDataModule(root, batch_size=8, representation=name)
         records = dm.dataset(split).records
         scores = np.array([smoothness(r.motion, alpha) for r in records if len(r.motion) >= 3])

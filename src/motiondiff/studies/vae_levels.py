@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from motiondiff.eval import report
 from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_metrics
@@ -122,7 +123,7 @@ def evaluate_levels(modules: dict[str, MotionVAEModule], dm, evaluators: Evaluat
     first = next(iter(modules.values()))
     candidates = {"mean motion": (first, mean_motion(first, test.features))}
     candidates.update({level: (m, reconstruct(m, test.features)) for level, m in modules.items()})
-    for name, (module, recons) in candidates.items():
+    for name, (module, recons) in tqdm(candidates.items(), desc="VAE rows", unit="row"):
         rows[name] = report.summarise(protocol(real_test, evaluators.embed_motion(recons)))
         for key, errors in clip_errors(module, test.features, recons).items():
             rows[name][key] = (*report.mean_ci(errors), len(errors))

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from tqdm import tqdm
 
 from motiondiff.eval.report import mean_ci
 from motiondiff.model_files.loading import load_latent_model
@@ -177,10 +178,10 @@ def main(argv: list[str] | None = None) -> int:
     dm.setup("test")
     records = dm.dataset("test").records[: cfg.captions]
     results = []
-    for i, rec in enumerate(records):
+    for i, rec in enumerate(tqdm(records, desc="captions", unit="caption")):
         results.append(run_caption(pipe, evaluators, rec.texts[0], FRAMES, weights, samples, steps, seed + i,
                                    **sample_kwargs))  # fmt: skip
-        print(f"[{i + 1}/{len(records)}] {rec.texts[0][:70]!r}: guided {results[-1]['guided_text']!r}", flush=True)
+        tqdm.write(f"[{i + 1}/{len(records)}] {rec.texts[0][:70]!r}: guided {results[-1]['guided_text']!r}")
     meta = {"checkpoint": str(ckpt), "local_model": cfg.local_model, "weights": weights,
             "samples": samples, "level_steps": steps, "seed": seed, **sample_kwargs}  # fmt: skip
     summary = summarise(results, weights)

@@ -30,3 +30,9 @@ def test_jp_filter_is_the_joint_filter_and_rotations_are_refused():
     with pytest.raises(ValueError, match="rp6jr"):
         smooth_features(rng.normal(size=(30, 129)), 2.0, "rp6jr")
     assert np.array_equal(smooth_features(feats, 0, "rp6jr"), feats)  # off: nothing to refuse
+
+
+def test_the_study_shows_progress_on_stderr(capsys):
+    representation_smoothness(embedded_data_root(), "val", names=("jp",))
+    err = capsys.readouterr().err
+    assert "representations" in err and "1/1" in err  # tqdm's bar over the representations, finished
