@@ -33,6 +33,9 @@ from common import REPO, install_cost, max_abs, require, speed, write  # noqa: E
 from motiondiff.data.formats.bvh import read_bvh, write_bvh  # noqa: E402
 from motiondiff.geometry.rotations import qangle  # noqa: E402
 
+sys.path.insert(0, str(REPO / "tests" / "fixtures"))  # the tests' bvhio reader: world positions as bvhio computes them
+from bvh_reader import bvhio_positions  # noqa: E402
+
 DATA = REPO.parent / "shared" / "data" / "bandai-namco"
 
 with warnings.catch_warnings():  # bvhio imports PyGLM as `glm`, which PyGLM plans to deprecate
@@ -70,18 +73,6 @@ def bvhio_local(path: Path) -> dict:
     return out
 
 
-def bvhio_world(path: Path, names: list[str]) -> np.ndarray:
-    """World positions (F, J, 3) in the order of `names`, as bvhio's hierarchy computes them."""
-    root = bvhio.readAsHierarchy(str(path))
-    joints = {joint.Name: joint for joint, _, _ in root.layout()}
-    frames = root.getKeyframeRange()[1] + 1
-    out = np.empty((frames, len(names), 3))
-    for f in range(frames):
-        root.loadPose(f)
-        out[f] = [tuple(joints[n].PositionWorld) for n in names]
-    return out
-
-
 def compare_file(path: Path) -> dict:
     ours = read_bvh(path)
     theirs = bvhio_local(path)
@@ -89,7 +80,7 @@ def compare_file(path: Path) -> dict:
     offsets = max(max_abs(ours.offsets[idx[n]], v[0]) for n, v in theirs.items())
     trans = max(max_abs(ours.translations[:, idx[n]], v[1]) for n, v in theirs.items())
     angle = max(float(np.degrees(qangle(ours.rotations[:, idx[n]], v[2])).max()) for n, v in theirs.items())
-    world = max_abs(ours.positions(), bvhio_world(path, ours.joint_names))
+    world = max_abs(ours.positions(), bvhio_positions(path, ours.joint_names))
     return {"frames": ours.num_frames, "joints": ours.num_joints, "offset_cm": offsets, "translation_cm": trans,
             "rotation_deg": angle, "world_position_cm": world}  # fmt: skip
 
@@ -178,7 +169,7 @@ def unusual_files(folder: Path) -> dict:
         path.write_bytes(text.encode("latin-1") if "Rücken" in text else text.encode())
         ours, ours_err = _outcome(partial(read_bvh, path))
         names = ours.joint_names if ours else ["Hips", "Spine", "Head"]
-        theirs, theirs_err = _outcome(partial(bvhio_world, path, names))
+        theirs, theirs_err = _outcome(partial(bvhio_positions, path, names))
         row = {"project": "read" if ours else ours_err, "bvhio": "read" if theirs is not None else theirs_err}
         if ours is not None and theirs is not None:
             row["world_position_difference"] = max_abs(ours.positions(), theirs)
@@ -205,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
         names = {p: read_bvh(p).joint_names for p in timed}
         readers = {
             "read": (lambda p: read_bvh(p), lambda p: bvhio.readAsBvh(str(p))),
-            "read_and_world_positions": (lambda p: read_bvh(p).positions(), lambda p: bvhio_world(p, names[p])),
+            "read_and_world_positions": (lambda p: read_bvh(p).positions(), lambda p: bvhio_positions(p, names[p])),
         }
         times = {}
         for label, (ours, theirs) in readers.items():
