@@ -30,7 +30,6 @@ from motiondiff.bench.report import machine
 from motiondiff.bench.timing import PeakMemory, median_seconds
 from motiondiff.bench.workloads import TINY
 from motiondiff.lit.conditions import text_encoder_kwargs
-from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
 from motiondiff.model_files.loading import load_model as load_module
 from motiondiff.model_files.resolve import find_model
 from motiondiff.models.denoiser import PRESETS
@@ -145,7 +144,7 @@ def run_suite(quick: bool = False, model: str = "shipped", command: str = "", co
     guidance = module.default_guidance
     name, steps = default_sampler()
     name = module.resolve_sampler(name)  # sampler=auto: the model's own
-    steps = SAMPLER_STEPS[name] if steps is None else steps
+    steps = module.default_steps(name) if steps is None else steps
     chains = [("ddpm", None), ("ddim", 50), ("ddim", 10)]
     if (name, steps) not in chains:
         chains.append((name, steps))

@@ -53,11 +53,15 @@ def _instantiate(cfg):
 
 def resolve_sampler(cfg: DictConfig, module) -> None:
     """``sampler=auto`` replaced by the model's own default sampler's config (conf/sampler/<name>.yaml), so what runs
-    and what results.json records is a named sampler with its steps."""
+    and what results.json records is a named sampler with its steps; the model's own sampler runs the model's own
+    steps (``default_steps``) however it was named."""
     from omegaconf import OmegaConf
 
     if cfg.sampler.get("name") == "auto":
         cfg.sampler = OmegaConf.load(REPO_DIR / "conf" / "sampler" / f"{module.resolve_sampler('auto')}.yaml")
+    name = cfg.sampler.get("name")
+    if name == module.default_sampler and module.hparams.model.get("sample_steps"):
+        cfg.sampler.steps = module.default_steps(name)
 
 
 def sampling_steps(cfg: DictConfig, module) -> int | None:

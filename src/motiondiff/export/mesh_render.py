@@ -17,7 +17,6 @@ from motiondiff.export.render import (
     VIDEO_SIZE,
     Title,
     camera_azimuth,
-    to_axes,
     check_video_path,
     draw_ground,
     follow,
@@ -25,6 +24,7 @@ from motiondiff.export.render import (
     quiet_matplotlib,
     save_frames,
     title_at,
+    to_axes,
     video_axes,
     wrap_title,
 )

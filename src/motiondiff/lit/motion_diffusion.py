@@ -237,11 +237,11 @@ class MotionDiffusion(torch.nn.Module):
         options = dict(generator=generator, x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress,
                        resample=resample, device=self.device, clip_x0=clip)  # fmt: skip
         if sampler == "ddim":
-            return ddim_sample(self.diffusion, fn, shape, steps=steps or SAMPLER_STEPS["ddim"], eta=eta, **options)
+            return ddim_sample(self.diffusion, fn, shape, steps=steps or self.default_steps("ddim"), eta=eta, **options)
         if sampler == "ddpm":
             return ddpm_sample(self.diffusion, fn, shape, steps=steps, **options)
         if sampler == "dpmpp":  # DPM-Solver++(2M); eta is unused (the solver is deterministic)
-            return dpmpp_sample(self.diffusion, fn, shape, steps=steps or SAMPLER_STEPS["dpmpp"], **options)
+            return dpmpp_sample(self.diffusion, fn, shape, steps=steps or self.default_steps("dpmpp"), **options)
         raise ValueError(f"unknown sampler {sampler!r}; choose one of {', '.join(SAMPLER_STEPS)}")
 
     def set_clip_rule(self, rule: str | None) -> None:
@@ -259,6 +259,12 @@ class MotionDiffusion(torch.nn.Module):
         """The sampler generation uses when none is named: ``model.sample_sampler`` where the model's recipe chose
         one on val (the action model keeps DDIM-50: DPM-Solver++-7 missed its FID), else DPM-Solver++ (7 steps)."""
         return str(self.hparams.model.get("sample_sampler", "dpmpp"))
+
+    def default_steps(self, sampler: str) -> int | None:
+        """The steps `sampler` runs when none are given: ``model.sample_steps`` for the model's own sampler where its
+        recipe chose the pair on val, else the sampler's usual count (``SAMPLER_STEPS``; None: DDPM's whole chain)."""
+        own = self.hparams.model.get("sample_steps")
+        return int(own) if own and sampler == self.default_sampler else SAMPLER_STEPS[sampler]
 
     def resolve_sampler(self, name: str | None) -> str:
         """``name``, or the model's `default_sampler` for "auto"/None; an unknown name is refused."""

@@ -289,7 +289,7 @@ class MotionPipeline:
         if sampler not in ("auto", *SAMPLER_STEPS):
             raise UsageError(f"sampler must be auto or one of {', '.join(SAMPLER_STEPS)}, got {sampler!r}")
         sampler = self.model.resolve_sampler(sampler)
-        steps = fitted_steps(self.model, checked["steps"], SAMPLER_STEPS[sampler])
+        steps = fitted_steps(self.model, checked["steps"], self.model.default_steps(sampler))
         return {"guidance": float(guidance), "sampler": sampler, "steps": steps, "eta": checked["eta"]}
 
     @staticmethod

@@ -28,7 +28,6 @@ from motiondiff.edit.measures import mean_joint_acceleration, mean_joint_speed
 from motiondiff.edit.smoothing import smooth_features, smooth_joints
 from motiondiff.eval import action_table
 from motiondiff.lit.generation import fitted_steps, generate_features
-from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
 from motiondiff.model_files.loading import load_model as load_module
 from motiondiff.model_files.resolve import find_model
 from motiondiff.pipelines import MotionPipeline
@@ -152,7 +151,7 @@ def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tupl
     model = pipe.model
     frames = torch.full((n,), round(seconds * pipe.fps))
     sampler = model.resolve_sampler(sampler)
-    steps = fitted_steps(model, steps, SAMPLER_STEPS.get(sampler))
+    steps = fitted_steps(model, steps, model.default_steps(sampler))
     generator = torch.Generator(device=model.device).manual_seed(int(seed))
     feats = generate_features(model, [None] * n, frames, generator=generator, sampler=sampler, steps=steps)
     joints = [smooth_joints(model.representation.decode_numpy(f).astype(np.float32), smooth_sigma) for f in feats]

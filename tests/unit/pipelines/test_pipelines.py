@@ -42,6 +42,25 @@ def test_the_default_sampler_is_the_models_own(pipe, monkeypatch):
         pipe("a person walks forward", seconds=1, sampler="euler")
 
 
+def test_the_models_own_sampler_runs_its_own_steps(pipe, monkeypatch):
+    from omegaconf import OmegaConf
+
+    from motiondiff.cli.common import sampling_steps
+    from motiondiff.runtime.paths import REPO_DIR
+
+    monkeypatch.setitem(pipe.model.hparams.model, "sample_steps", 10)  # a recipe that chose DPM-Solver++-10 on val
+    assert pipe.model.default_steps("dpmpp") == 10 and pipe.model.default_steps("ddim") == 50
+    assert pipe("a person walks forward", seconds=1).info["steps"] == 10
+    assert pipe("a person walks forward", seconds=1, sampler="dpmpp").info["steps"] == 10
+    assert pipe("a person walks forward", seconds=1, sampler="ddim").info["steps"] == 50
+    assert pipe("a person walks forward", seconds=1, steps=4).info["steps"] == 4
+    for sampler, steps, expected in (("auto", None, 10), ("dpmpp", None, 10), ("ddim", None, 50), ("auto", 3, 3)):
+        cfg = OmegaConf.create(
+            {"sampler": OmegaConf.load(REPO_DIR / "conf" / "sampler" / f"{sampler}.yaml"), "steps": steps}
+        )
+        assert sampling_steps(cfg, pipe.model) == expected, (sampler, steps)
+
+
 def test_save_and_export(pipe, tmp_path):
     out = pipe("a person walks forward", seconds=2, steps=3)
     rows = out.save(tmp_path / "walk", formats=["bvh", "html"])
