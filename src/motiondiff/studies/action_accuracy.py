@@ -28,7 +28,7 @@ from motiondiff.model_files.resolve import find_model
 from motiondiff.pipelines.coverage import load_prompt_mapping
 from motiondiff.runtime.atomic import finite_or_null, write_json
 from motiondiff.runtime.paths import REPO_DIR, work_dir
-from motiondiff.studies.behaviour import sampling_args
+from motiondiff.studies.behaviour import sampler_text, sampling_args
 from motiondiff.studies.config import study_config
 
 PARAPHRASES = REPO_DIR / "data" / "paraphrases" / "bandai_human.json"
@@ -112,7 +112,7 @@ def main(argv: list[str]) -> None:
     out = Path(cfg.out or outputs / "action_accuracy" / time.strftime("%Y-%m-%d_%H-%M-%S"))
     out.mkdir(parents=True, exist_ok=True)
     notes = [f"checkpoint: {ckpt}", f"classifier: {evaluator_dir}", f"descriptions: {cfg.captions} ({len(items)}), "
-             f"{n} samples each, seed {seed}; sampler {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
+             f"{n} samples each, seed {seed}; sampler {sampler_text(module, sampling)}, "
              f"guidance {sampling['guidance']:g}, prompt mapping {cfg.prompt_mapping}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}; "
              f"{time.perf_counter() - start:.0f} s",
              f"accuracy over all {len(result['asked'])} motions: {accuracy:.3f}; lowest action: "

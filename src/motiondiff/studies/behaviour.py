@@ -183,6 +183,14 @@ def sampling_args(cfg) -> dict:
     return sampling
 
 
+def sampler_text(module, sampling: dict) -> str:
+    """'<sampler> <steps> steps' that actually ran for a study's `sampling` (the model's own sampler and its steps
+    where the config named none), for the report's header."""
+    name = module.resolve_sampler(sampling["sampler"])
+    steps = fitted_steps(module, sampling["steps"], module.default_steps(name))
+    return f"{name}, {steps or 'all'} steps"
+
+
 def classify(evaluators, features: list[np.ndarray], smooth_sigma: float | None = None, layout: str = "hml263"):
     """The action classifier's label id for each clip of features, smoothed first as evaluate.py scores samples
     (``smooth_features``: the classifier reads the motion whose joints the report measures)."""
@@ -277,7 +285,7 @@ def main(argv: list[str]) -> None:
     sampling = sampling_args(cfg)
     sampling.setdefault("smooth_sigma", module.default_smooth_sigma)  # what sample.py gives users by default
     guidance = sampling.get("guidance", module.default_guidance)
-    header = [f"checkpoint: {ckpt}", f"sampler: {sampling['sampler']} steps {sampling['steps'] or 'all'}, "
+    header = [f"checkpoint: {ckpt}", f"sampler: {sampler_text(module, sampling)}, "
               f"guidance {guidance:g}, temporal smoothing sigma {sampling['smooth_sigma'] or 'off'}, "
               f"seed {cfg.seed}",
               f"classifier: {evaluator_dir if evaluators else 'none (no action.safetensors): no verdicts'}"]  # fmt: skip

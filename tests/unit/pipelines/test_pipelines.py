@@ -34,7 +34,7 @@ def test_text_to_motion_and_reproducible_seeds(pipe):
 
 def test_the_default_sampler_is_the_models_own(pipe, monkeypatch):
     out = pipe("a person walks forward", seconds=1)
-    assert out.info["sampler"] == "dpmpp" and out.info["steps"] == 7 and np.isfinite(out.joints[0]).all()
+    assert out.info["sampler"] == "dpmpp" and out.info["steps"] == 10 and np.isfinite(out.joints[0]).all()  # its JSON
     assert pipe("a person walks forward", seconds=1, sampler="ddim").info["steps"] == 50
     monkeypatch.setitem(pipe.model.hparams.model, "sample_sampler", "ddim")  # a recipe that chose DDIM on val
     assert pipe("a person walks forward", seconds=1, steps=3).info["sampler"] == "ddim"
@@ -48,13 +48,13 @@ def test_the_models_own_sampler_runs_its_own_steps(pipe, monkeypatch):
     from motiondiff.cli.common import sampling_steps
     from motiondiff.runtime.paths import REPO_DIR
 
-    monkeypatch.setitem(pipe.model.hparams.model, "sample_steps", 10)  # a recipe that chose DPM-Solver++-10 on val
-    assert pipe.model.default_steps("dpmpp") == 10 and pipe.model.default_steps("ddim") == 50
-    assert pipe("a person walks forward", seconds=1).info["steps"] == 10
-    assert pipe("a person walks forward", seconds=1, sampler="dpmpp").info["steps"] == 10
+    monkeypatch.setitem(pipe.model.hparams.model, "sample_steps", 12)  # a recipe that chose DPM-Solver++-12 on val
+    assert pipe.model.default_steps("dpmpp") == 12 and pipe.model.default_steps("ddim") == 50
+    assert pipe("a person walks forward", seconds=1).info["steps"] == 12
+    assert pipe("a person walks forward", seconds=1, sampler="dpmpp").info["steps"] == 12
     assert pipe("a person walks forward", seconds=1, sampler="ddim").info["steps"] == 50
     assert pipe("a person walks forward", seconds=1, steps=4).info["steps"] == 4
-    for sampler, steps, expected in (("auto", None, 10), ("dpmpp", None, 10), ("ddim", None, 50), ("auto", 3, 3)):
+    for sampler, steps, expected in (("auto", None, 12), ("dpmpp", None, 12), ("ddim", None, 50), ("auto", 3, 3)):
         cfg = OmegaConf.create(
             {"sampler": OmegaConf.load(REPO_DIR / "conf" / "sampler" / f"{sampler}.yaml"), "steps": steps}
         )
