@@ -58,6 +58,13 @@ def fitted_steps(module, steps, default: int | None) -> int | None:
     return None if default is None else min(int(default), num_steps)
 
 
+def resolved_sampling(module, sampler: str | None, steps) -> tuple[str, int | None]:
+    """(sampler, steps) that run for a request: "auto"/None is the model's own sampler, and steps not given are that
+    sampler's default for this model (``default_steps``), both fitted to its diffusion steps (`fitted_steps`)."""
+    name = module.resolve_sampler(sampler)
+    return name, fitted_steps(module, steps, module.default_steps(name))
+
+
 def feed_forward_shape(module, motions: int, frames: int) -> tuple[int, int, int]:
     """(rows, d_model, ff_size) of the denoiser's feed-forward matmul when sampling `motions` guided motions of
     `frames` frames (two streams each): what `hardware.inference_precision` times to choose bf16 or not."""

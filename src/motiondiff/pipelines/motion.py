@@ -31,8 +31,8 @@ from motiondiff.lit.generation import (
     MAX_LONG_SAMPLES,
     check_num_samples,
     feed_forward_shape,
-    fitted_steps,
     generate_features,
+    resolved_sampling,
     sampling_precision,
 )
 from motiondiff.lit.motion_diffusion import SAMPLER_STEPS
@@ -288,8 +288,7 @@ class MotionPipeline:
         guidance = self.model.default_guidance if checked["guidance"] is None else checked["guidance"]
         if sampler not in ("auto", *SAMPLER_STEPS):
             raise UsageError(f"sampler must be auto or one of {', '.join(SAMPLER_STEPS)}, got {sampler!r}")
-        sampler = self.model.resolve_sampler(sampler)
-        steps = fitted_steps(self.model, checked["steps"], self.model.default_steps(sampler))
+        sampler, steps = resolved_sampling(self.model, sampler, checked["steps"])
         return {"guidance": float(guidance), "sampler": sampler, "steps": steps, "eta": checked["eta"]}
 
     @staticmethod

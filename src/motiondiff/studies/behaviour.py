@@ -27,7 +27,7 @@ from motiondiff.data.preparing.captions import measure
 from motiondiff.edit.measures import mean_joint_acceleration, mean_joint_speed
 from motiondiff.edit.smoothing import smooth_features, smooth_joints
 from motiondiff.eval import action_table
-from motiondiff.lit.generation import fitted_steps, generate_features
+from motiondiff.lit.generation import generate_features, resolved_sampling
 from motiondiff.model_files.loading import load_model as load_module
 from motiondiff.model_files.resolve import find_model
 from motiondiff.pipelines import MotionPipeline
@@ -150,8 +150,7 @@ def _unconditioned(pipe, seconds, n, seed, sampler, steps, smooth_sigma) -> tupl
 
     model = pipe.model
     frames = torch.full((n,), round(seconds * pipe.fps))
-    sampler = model.resolve_sampler(sampler)
-    steps = fitted_steps(model, steps, model.default_steps(sampler))
+    sampler, steps = resolved_sampling(model, sampler, steps)
     generator = torch.Generator(device=model.device).manual_seed(int(seed))
     feats = generate_features(model, [None] * n, frames, generator=generator, sampler=sampler, steps=steps)
     joints = [smooth_joints(model.representation.decode_numpy(f).astype(np.float32), smooth_sigma) for f in feats]
@@ -186,8 +185,7 @@ def sampling_args(cfg) -> dict:
 def sampler_text(module, sampling: dict) -> str:
     """'<sampler> <steps> steps' that actually ran for a study's `sampling` (the model's own sampler and its steps
     where the config named none), for the report's header."""
-    name = module.resolve_sampler(sampling["sampler"])
-    steps = fitted_steps(module, sampling["steps"], module.default_steps(name))
+    name, steps = resolved_sampling(module, sampling["sampler"], sampling["steps"])
     return f"{name}, {steps or 'all'} steps"
 
 
