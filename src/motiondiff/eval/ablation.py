@@ -1,4 +1,4 @@
-"""The summary table of an ablation multirun (`python train.py -m experiment=ablation_bandai 'ablation=glob(*)'`).
+"""The summary table of an ablation multirun (the command: `COMMAND` below).
 
 Each cell's run folder holds metrics.json (evaluate.py's protocol at the end of training) and run.json (steps
 trained, the cell's labels). When the multirun ends, `AblationTable` writes `<sweep dir>/ablation.md`: one table per
@@ -22,7 +22,7 @@ TITLES = {
     "prediction_representation": "Prediction x representation (trans_enc backbone)",
     "backbone": "Backbone (x0 prediction, hml263 features)",
 }
-COMMAND = "python train.py -m experiment=ablation_bandai 'ablation=glob(*)'"
+COMMAND = "python train.py -m experiment=ablation_bandai 'ablation=glob(*,exclude=[*_rpqjr,*_t10,*_t100,*_token_*])'"
 # vvMDM eq. 16 (closer to 1 = smoother), on the HumanML3D features of every cell's samples (one space for all)
 EXTRA = (("smoothness", "Smoothness"),)
 

@@ -1,0 +1,48 @@
+#!/bin/bash
+# One cell of issue 43's full-Bandai ablation (rules: docs/results/ablation_plan.md), resumed across sittings.
+#   docs/results/ablation_full/cell.sh <cell of conf/ablation> [text|action|none]
+# text cells are MDM's (loss=simple); action and none are vvMDM's Tab. 1 (loss=geometric, as vvMDM trains).
+# A sitting resumes from the run folder, else from the sitting checkpoint committed in sittings/. A cell is finished
+# when its last checkpoint is at the cap or the stopping rule fired; then its best-val-FID checkpoint is evaluated
+# once on the test split (20 replications) into cells/<cond>_<cell>/test/. Stop a sitting with kill -INT <pid>
+# (the checkpoint after the latest evaluation, at most 1,000 steps back, is where the next sitting starts).
+set -u
+cd "$(dirname "$0")/../../.."; source .venv/bin/activate
+lib=$(ls /usr/lib/*/libtcmalloc_minimal.so.4 2>/dev/null | head -1); [ -n "$lib" ] && export LD_PRELOAD=$lib
+CELL=$1; COND=${2:-text}
+case $COND in
+  text) EXTRA="";;
+  action) EXTRA="condition=action loss=geometric";;
+  none) EXTRA="condition=none loss=geometric";;
+  *) echo "condition must be text, action or none, got $COND"; exit 2;;
+esac
+NAME=${COND}_${CELL}; HERE=docs/results/ablation_full
+RUN=outputs/ablation_full/$NAME; SITTING=$HERE/sittings/$NAME.ckpt; CELLDIR=$HERE/cells/$NAME
+finished() {  # the cap reached, or the plateau rule fired at the last evaluation
+  python - "$RUN/checkpoints/last.ckpt" <<'PY'
+import sys, torch
+from motiondiff.eval.plateau import plateaued
+try:
+    c = torch.load(sys.argv[1], map_location="cpu", weights_only=False)
+except FileNotFoundError:
+    sys.exit(1)
+h = [tuple(x) for x in c["callbacks"].get("PlateauStop", {}).get("history", [])]
+sys.exit(0 if c["global_step"] >= 15000 or plateaued(h, 0.05, 3000, 4000) else 1)
+PY
+}
+if [ ! -f $RUN/checkpoints/last.ckpt ] && [ -f $SITTING ]; then
+  mkdir -p $RUN/checkpoints && cp $SITTING $RUN/checkpoints/last.ckpt
+fi
+mkdir -p $CELLDIR
+if ! finished; then
+  ck=""; [ -f $RUN/checkpoints/last.ckpt ] && ck="ckpt_path=$RUN/checkpoints/last.ckpt"
+  echo "$(date -u +%FT%TZ) sitting starts ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), ${ck:-from scratch})" >> $CELLDIR/sittings.log
+  python train.py experiment=ablation_full ablation=$CELL $EXTRA hydra.run.dir=$RUN $ck
+  echo "$(date -u +%FT%TZ) sitting ends (exit $?)" >> $CELLDIR/sittings.log
+fi
+finished || exit 0
+if [ ! -f $CELLDIR/test/metrics.json ]; then
+  best=$(ls $RUN/checkpoints/best-fid-*.ckpt | head -1)
+  python evaluate.py checkpoint=$best split=test replications=20 mm_replications=0 hydra.run.dir=$CELLDIR/test
+fi
+for f in $RUN/csv/version_*/metrics.csv; do cp $f $CELLDIR/curve_$(basename $(dirname $f)).csv; done  # one per sitting
