@@ -2,7 +2,7 @@
 
     motiondiff-demo                                  # http://127.0.0.1:7860
     motiondiff-demo --port 8000 --host 0.0.0.0       # reachable from the network
-    motiondiff-demo guided=outputs/latent/<run>/checkpoints/last.ckpt   # also offer GuidedMotion
+    motiondiff-demo guided=outputs/latent/<run>/checkpoints/last.ckpt   # also offer your own GuidedMotion model
 
 Options are `--name value` or, like the other commands, `name=value`. `--share` asks Gradio for a public link (it
 needs internet and is off by default).

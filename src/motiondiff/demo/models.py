@@ -47,8 +47,10 @@ class ModelInfo:
 
 
 def released_choices() -> list[ModelChoice]:
-    """The released models: the "text" and "action" aliases first, then other releases in checkpoints/models."""
-    choices = [ModelChoice(k, f"{k} (released: {p.stem})", k) for k, p in SHIPPED_MODELS.items() if p.is_file()]
+    """The released models: the "text", "action" and "guidedmotion" aliases first, then other releases in
+    checkpoints/models."""
+    choices = [ModelChoice(k, f"{k} (released: {p.stem})", k, guided=k == "guidedmotion")
+               for k, p in SHIPPED_MODELS.items() if p.is_file()]  # fmt: skip
     aliased = {p.stem for p in SHIPPED_MODELS.values()}
     for name in released_names():  # model releases only (not their .coverage banks)
         if name not in aliased and name not in SHIPPED_MODELS:

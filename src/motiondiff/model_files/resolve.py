@@ -1,8 +1,8 @@
 """Which model file a name or path means: the one resolver behind `checkpoint=` on every command and
 `from_pretrained` in the Python API, so both take the same names.
 
-Names: "shipped" (the released model for the condition asked: text, or action), the condition names themselves
-("text", "action", "guidedmotion" once a GuidedMotion model is released), a release's file stem in
+Names: "shipped" (the released model for the condition asked: text, action or guidedmotion), the condition names themselves
+("text", "action", "guidedmotion"), a release's file stem in
 checkpoints/models ("bandai_text_cpu"), "latest" / "best" (the newest training run's last or best-FID checkpoint),
 or a path to a .ckpt / .safetensors / .json file.
 """
@@ -21,6 +21,7 @@ RELEASE_SUFFIXES = (".safetensors", ".json")
 SHIPPED_MODELS = {
     "text": MODELS_DIR / "bandai_text_long_42k.safetensors",  # docs/results/shipping/rules.md
     "action": MODELS_DIR / "bandai_action_cpu.safetensors",
+    "guidedmotion": MODELS_DIR / "bandai_guided_cpu.safetensors",  # with its three VAEs; docs/results/guidedmotion
 }
 RUN_NAMES = ("latest", "best")
 
@@ -48,9 +49,6 @@ def find_model(spec: str | Path, output_dir: str | Path | None = None, condition
             raise UsageError(f"the shipped {key} model {shipped} is missing: restore it with "
                              "`git checkout -- checkpoints`")  # fmt: skip
         return shipped
-    if key == "guidedmotion" and key not in SHIPPED_MODELS:
-        raise UsageError("no GuidedMotion model is released yet: train one (train_vae.py, then train_latent.py) and "
-                         "pass checkpoint=<its .ckpt>")  # fmt: skip
     if key in RUN_NAMES:
         return _from_runs(key, Path(output_dir) if output_dir is not None else work_dir() / "outputs")
     if "/" not in key and (MODELS_DIR / f"{key}.safetensors").is_file():

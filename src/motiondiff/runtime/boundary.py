@@ -24,7 +24,7 @@ from pathlib import Path
 
 from motiondiff.runtime.atomic import TEMP_GLOB
 from motiondiff.runtime.errors import DatasetNotFoundError, RepresentationError, UsageError
-from motiondiff.runtime.processes import alive
+from motiondiff.runtime.processes import alive, take_lock
 
 USER_ERRORS = (UsageError, DatasetNotFoundError, RepresentationError)  # raised with a message that names the fix
 LOCK_NAME = ".motiondiff.lock"
@@ -207,15 +207,7 @@ def run_folder(out: Path, job_name: str):
     fresh = _fresh(out, job_name)
     remove_stale_runs(out.parent)
     lock = out / LOCK_NAME
-    while True:
-        try:
-            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            break
-        except FileExistsError:
-            refuse_if_in_use(out)
-            lock.unlink(missing_ok=True)  # stale: its run was killed
-    with os.fdopen(fd, "w") as f:
-        f.write(f"{os.getpid()} {int(fresh)} {socket.gethostname()}")
+    take_lock(lock, f"{os.getpid()} {int(fresh)} {socket.gethostname()}", lambda: refuse_if_in_use(out))
     failed = True
     try:
         yield

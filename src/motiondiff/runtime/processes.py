@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from pathlib import Path
 
 
 def alive(pid: int) -> bool:
@@ -16,3 +18,18 @@ def alive(pid: int) -> bool:
     except OSError:
         return False
     return True
+
+
+def take_lock(lock: Path, content: str, refuse_if_held: Callable[[], None]) -> None:
+    """Create ``lock`` exclusively (O_EXCL) holding ``content`` (the holder's pid first). Where it exists,
+    ``refuse_if_held()`` raises while its holder is alive; otherwise the lock is stale (its process was killed) and is
+    replaced. One place for the pid locks of run folders and dataset preparation."""
+    while True:
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            break
+        except FileExistsError:
+            refuse_if_held()
+            lock.unlink(missing_ok=True)
+    with os.fdopen(fd, "w") as f:
+        f.write(content)

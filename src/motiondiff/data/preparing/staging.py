@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from motiondiff.data.preparing.writer import PrepareError, check_output
-from motiondiff.runtime.processes import alive
+from motiondiff.runtime.processes import alive, take_lock
 
 _AT_FDCWD, _RENAME_EXCHANGE = -100, 2
 _TEMP = re.compile(r"^\.(?P<name>.+)\.(?P<kind>building|replaced)-(?P<pid>\d+)$")
@@ -86,21 +86,17 @@ def _one_writer(out: Path):
     """Hold ``out`` for this process (``.<name>.lock`` beside it, created exclusively): a second `prepare` into the
     same folder is refused while the first is alive, instead of both reporting success."""
     lock = out.parent / f".{out.name}.lock"
-    while True:
+
+    def refuse_if_held() -> None:
         try:
-            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            break
-        except FileExistsError:
-            try:
-                pid, young = int(lock.read_text() or 0), time.time() - lock.stat().st_mtime < 5
-            except (OSError, ValueError):
-                pid, young = 0, False
-            if (pid and pid != os.getpid() and alive(pid)) or (not pid and young):  # empty: being written now
-                raise PrepareError(f"another prepare (pid {pid or '?'}) is writing --out {out}: wait for it to "
-                                   "finish, or choose another --out") from None  # fmt: skip
-            lock.unlink(missing_ok=True)  # its process is gone
-    with os.fdopen(fd, "w") as f:
-        f.write(str(os.getpid()))
+            pid, young = int(lock.read_text() or 0), time.time() - lock.stat().st_mtime < 5
+        except (OSError, ValueError):
+            pid, young = 0, False
+        if (pid and pid != os.getpid() and alive(pid)) or (not pid and young):  # empty: being written now
+            raise PrepareError(f"another prepare (pid {pid or '?'}) is writing --out {out}: wait for it to "
+                               "finish, or choose another --out") from None  # fmt: skip
+
+    take_lock(lock, str(os.getpid()), refuse_if_held)
     try:
         yield
     finally:
