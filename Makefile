@@ -80,23 +80,15 @@ bench: setup allocator
 	$(WITH_TCMALLOC) $(PY) bench/run.py $(if $(OFFICIAL),--official "$(OFFICIAL)")
 
 # GuidedMotion against MDM on the complex-motion split (docs/results/guidedmotion), every stage timed in its run.json:
-# the three motion VAEs and the latent stage with the CPU recipe, then MDM for the same total wall time, then the
-# comparison, the Tab. 4 ablation and sampling times. About 3 h of 2-core CPU; a finished stage is not run again.
-GC ?= outputs/guided_compare
-GC_VAE_STEPS ?= 960
-GC_LATENT_STEPS ?= 5000
+# the three motion VAEs and the latent stage with the CPU recipe, every train clip also mirrored (resumable, in
+# sittings: docs/results/guidedmotion/mirror_release/run.sh), then MDM on the same mirrored data for the same total
+# wall time, then the comparison, the Tab. 4 ablation and sampling times. A finished stage is not run again.
+GC ?= outputs/guided_mirror
 GC_REPLICATIONS ?= 5
-GC_OUT ?= docs/results/guidedmotion/comparison_scaled_linear
-COMP := dataset=bandai_mini_compositional
+GC_OUT ?= docs/results/guidedmotion/comparison_mirror
+COMP := dataset=bandai_mini_compositional dataset.datamodule.mirror=true
 guided-compare: setup allocator
-	@for level in motion action specific; do test -f $(GC)/vae_$$level/checkpoints/last.ckpt || \
-		$(WITH_TCMALLOC) $(PY) train_vae.py level=$$level $(COMP) batch_size=16 optim.lr=5e-4 \
-			trainer.max_steps=$(GC_VAE_STEPS) trainer.check_val_every_n_epoch=5 checkpoint_every=240 \
-			hydra.run.dir=$(GC)/vae_$$level || exit 1; done
-	test -f $(GC)/latent/checkpoints/last.ckpt || $(WITH_TCMALLOC) $(PY) train_latent.py \
-		vae.motion=$(GC)/vae_motion/checkpoints/last.ckpt vae.action=$(GC)/vae_action/checkpoints/last.ckpt \
-		vae.specific=$(GC)/vae_specific/checkpoints/last.ckpt batch_size=32 optim.lr=2e-4 optim.schedule=cosine \
-		optim.warmup_steps=200 trainer.max_steps=$(GC_LATENT_STEPS) hydra.run.dir=$(GC)/latent
+	GC=$(GC) docs/results/guidedmotion/mirror_release/run.sh
 	test -f $(GC)/mdm/checkpoints/last.ckpt || $(WITH_TCMALLOC) $(PY) train.py $(COMP) trainer.max_steps=-1 \
 		"+trainer.max_time={seconds: $$($(PY) -c 'import json,sys; print(int(sum(json.load(open(f"$(GC)/{s}/run.json"))["train_seconds"] for s in sys.argv[1:])))' vae_motion vae_action vae_specific latent)}" \
 		hydra.run.dir=$(GC)/mdm

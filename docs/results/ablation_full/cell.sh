@@ -4,8 +4,9 @@
 # text cells are MDM's (loss=simple); action and none are vvMDM's Tab. 1 (loss=geometric, as vvMDM trains).
 # A sitting resumes from the run folder, else from the sitting checkpoint committed in sittings/. A cell is finished
 # when its last checkpoint is at the cap or the stopping rule fired; then its best-val-FID checkpoint is evaluated
-# once on the test split (20 replications) into cells/<cond>_<cell>/test/. Stop a sitting with kill -INT <pid>
-# (the checkpoint after the latest evaluation, at most 1,000 steps back, is where the next sitting starts).
+# once on the test split (20 replications) into cells/<cond>_<cell>/test/. Stop a sitting with kill -9 <python pid>
+# (a background job ignores SIGINT): the checkpoint after the latest evaluation, at most 1,000 steps back, is where
+# the next sitting starts.
 set -u
 cd "$(dirname "$0")/../../.."; source .venv/bin/activate
 lib=$(ls /usr/lib/*/libtcmalloc_minimal.so.4 2>/dev/null | head -1); [ -n "$lib" ] && export LD_PRELOAD=$lib

@@ -1,7 +1,8 @@
 #!/bin/bash
 # Issue 39's action model (experiment=bandai_action_long), resumed across sittings from its run folder, else from the
 # sitting checkpoint committed beside this script (long_run/last.ckpt: weights, EMA, optimizer and data order).
-# Needs data/bandai (make data-full). Stop a sitting with kill -INT <pid>. Rules: rules.md beside this script.
+# Needs data/bandai (make data-full). Stop a sitting after a step checkpoint with kill -9 <python pid>
+# (a background job ignores SIGINT). Rules: rules.md beside this script.
 cd "$(dirname "$0")/../../../.."; source .venv/bin/activate
 lib=$(ls /usr/lib/*/libtcmalloc_minimal.so.4 2>/dev/null | head -1); [ -n "$lib" ] && export LD_PRELOAD=$lib
 RUN=outputs/train/bandai_action_long
