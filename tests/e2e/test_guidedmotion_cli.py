@@ -195,3 +195,16 @@ def test_a_latent_model_releases_as_safetensors_and_samples_like_its_checkpoint(
     config.write_text(json.dumps(broken))
     with pytest.raises(UsageError, match=r"hparams.vaes.action=None must be an object"):
         load_latent_model(weights)
+
+
+def test_the_released_guidedmotion_model_samples_without_training(tmp_path):
+    """`sample.py method=guidedmotion checkpoint=shipped` from an empty folder: the release (latent model and its
+    three VAEs) with local actions from the shipped text model."""
+    proc = run_cli("sample.py", "method=guidedmotion", "checkpoint=shipped", f"text='{CAPTION}'", "length=3",
+                   "level_steps=[3,3,4]", "export=none", "hydra.run.dir=out", env_dir=tmp_path)  # fmt: skip
+    assert "GuidedMotion sample(s)" in proc.stdout
+    result = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert Path(result["checkpoint"]).name == "bandai_guided_cpu.safetensors"
+    assert [a["text"] for a in result["local_actions"]] == ["walks forward", "raises both hands"]
+    joints = np.load(result["samples"][0]["joints"])
+    assert joints.shape[0] == 60 and np.isfinite(joints).all()

@@ -44,6 +44,22 @@ def test_release_round_trip_samples_identically(module, tmp_path):
     assert torch.equal(a, b)
 
 
+def test_half_matrices_store_matrices_in_float16_and_load_as_float32(module, tmp_path):
+    from safetensors.torch import load_file
+
+    full, _ = save_release(module, tmp_path / "full")
+    half, config = save_release(module, tmp_path / "half", {"steps": 0}, half_matrices=True)
+    stored = load_file(str(half))
+    assert {v.dtype for k, v in stored.items() if v.dim() >= 2} == {torch.float16}
+    assert all(v.dtype == module.state_dict()[k].dtype for k, v in stored.items() if v.dim() < 2)  # vectors as they were
+    assert half.stat().st_size < 0.6 * full.stat().st_size
+    assert json.loads(config.read_text())["provenance"]["weights_storage"].startswith("weight matrices float16")
+    loaded = load_release(half)
+    for k, v in module.state_dict().items():
+        got = loaded.state_dict()[k]
+        assert got.dtype == v.dtype and torch.equal(got, v.half().to(v.dtype) if v.dim() >= 2 else v), k
+
+
 def test_missing_or_foreign_files_are_refused(module, tmp_path):
     weights, config = save_release(module, tmp_path / "model")
     meta = json.loads(config.read_text())

@@ -35,12 +35,19 @@ from motiondiff.runtime.hardware import cpu_has_fast_bf16, cpu_model
 from motiondiff.runtime.provenance import git_state
 
 
-def save_release(module, path: str | Path, provenance: dict | None = None) -> tuple[Path, Path]:
+def save_release(module, path: str | Path, provenance: dict | None = None, half_matrices: bool = False
+                 ) -> tuple[Path, Path]:  # fmt: skip
     """Write `<stem>.safetensors` and `<stem>.json` for a MotionDiffusion model or a GuidedMotion latent model with
-    its VAEs (atomically, weights first)."""
+    its VAEs (atomically, weights first). ``half_matrices``: weight matrices stored as float16 (half the file; loading
+    casts them back), vectors (biases, norms, statistics) kept float32: for a release that would pass 20 MiB."""
     weights, config = release_paths(path)
     state = {k: v.detach().cpu().contiguous() for k, v in module.state_dict().items()}
     check_finite_state(state, f"the model to release as {weights}", "release a checkpoint whose weights are finite")
+    if half_matrices:
+        state = {k: v.half() if v.is_floating_point() and v.dim() >= 2 else v for k, v in state.items()}
+        check_finite_state(state, f"the model to release as {weights} (float16 matrices)",
+                           "release it without half_matrices: a weight is beyond float16's range")  # fmt: skip
+        provenance = {**(provenance or {}), "weights_storage": "weight matrices float16, vectors float32"}
     hparams = json.loads(json.dumps(dict(module.hparams), default=_plain))  # fails loudly on a non-JSON value
     if isinstance(hparams.get("text_encoder"), dict):  # a release names its encoder; a local path stays local
         hparams["text_encoder"].pop("path", None)
@@ -103,6 +110,9 @@ def _checked_release(path: str | Path, expected: str) -> tuple[dict, dict]:
         state = load_file(str(weights), device="cpu")
     bf16 = {k: v for k, v in state.items() if v.dtype == torch.bfloat16}  # numpy has no bfloat16
     check_finite_state(bf16, f"release weights {weights}", RESTORE)
+    provenance = meta.get("provenance") if isinstance(meta.get("provenance"), dict) else {}
+    if str(provenance.get("weights_storage", "")).startswith("weight matrices float16"):  # save_release(half_matrices=True): the model computes in float32
+        state = {k: v.float() if v.dtype == torch.float16 and v.dim() >= 2 else v for k, v in state.items()}
     return meta, state
 
 
@@ -127,10 +137,12 @@ def cpu_description() -> str:
     return f"{os.cpu_count()}-core {cpu_model()} ({isa})"
 
 
-def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple[Path, Path]:
+def release_checkpoint(ckpt: str | Path, out: str | Path, half_matrices: bool = False, **provenance
+                       ) -> tuple[Path, Path]:  # fmt: skip
     """Release a training checkpoint (a motion model, with its EMA weights when it trained with EMA, or a
     GuidedMotion latent model with its VAEs) with the training step, the run's
-    command line and `provenance` (data, training time, machine, metrics) in the JSON."""
+    command line and `provenance` (data, training time, machine, metrics) in the JSON (``half_matrices``: see
+    `save_release`)."""
     from motiondiff.lit.latent import HierarchicalLatentModule  # lazy: lightning, spacy (+5.1 s to import)
 
     state = torch_load(ckpt)
@@ -143,4 +155,4 @@ def release_checkpoint(ckpt: str | Path, out: str | Path, **provenance) -> tuple
     info = {"checkpoint": Path(ckpt).name, "train_steps": int(state["global_step"]),
             "command": "python " + " ".join(argv) if argv else None, "trained_at_git": trained.get("git"),
             "released_at_git": git_state(), **provenance}  # fmt: skip
-    return save_release(module, out, info)
+    return save_release(module, out, info, half_matrices)

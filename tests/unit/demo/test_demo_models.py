@@ -18,10 +18,12 @@ from motiondiff.runtime.errors import UsageError
 VIDEO = 128  # pixels: the smallest videos keep these tests quick
 
 
-def test_released_models_are_offered_and_guidedmotion_only_with_a_checkpoint(tmp_path):
-    keys = [c.key for c in released_choices()]
-    assert keys[:2] == ["text", "action"] and "bandai_mini_text_cpu" in keys  # other releases, not the aliased stems
+def test_released_models_are_offered_and_a_users_guidedmotion_checkpoint_too(tmp_path):
+    choices = released_choices()
+    keys = [c.key for c in choices]
+    assert keys[:3] == ["text", "action", "guidedmotion"] and "bandai_mini_text_cpu" in keys  # not the aliased stems
     assert not {path.stem for path in SHIPPED_MODELS.values()} & set(keys)
+    assert [c.key for c in choices if c.guided] == ["guidedmotion"]
     assert "guided" not in [c.key for c in DemoModels().choices]
     with pytest.raises(UsageError, match="no GuidedMotion checkpoint"):
         DemoModels(guided=tmp_path / "missing.ckpt")
