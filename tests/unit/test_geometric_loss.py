@@ -75,12 +75,13 @@ def test_equations_by_hand():
     x_hat[0, 2, 3 * foot + 2] = 0.2
     mask = torch.ones(1, 3, dtype=torch.bool)
     zero, one = torch.zeros(66, dtype=torch.float64), torch.ones(66, dtype=torch.float64)
-    terms = GeometricLoss(rep, contact_threshold=0.01).terms(x_hat, x0, mask, zero, one)
+    terms = GeometricLoss(rep, contact_threshold=0.01, reduction="equation").terms(x_hat, x0, mask, zero, one)
     assert float(terms["pos"]) == pytest.approx((0.25 + 0.04) / 3)
     assert float(terms["vel"]) == pytest.approx((0.25 + 0.29) / 2)
     assert float(terms["foot"]) == pytest.approx(0.04 / 2)
-    mean_terms = GeometricLoss(rep, contact_threshold=0.01, reduction="mean").terms(x_hat, x0, mask, zero, one)
-    assert float(mean_terms["pos"]) == pytest.approx((0.25 + 0.04) / 3 / 22)  # the old convention: 1/J of eq. 3
+    mean_terms = GeometricLoss(rep, contact_threshold=0.01).terms(x_hat, x0, mask, zero, one)  # the default
+    assert float(mean_terms["pos"]) == pytest.approx((0.25 + 0.04) / 3 / 22)  # MDM's code: 1/J of eq. 3
+    assert float(mean_terms["vel"]) == pytest.approx((0.25 + 0.29) / 2 / 66)  # 1/D of eq. 5
     with pytest.raises(ValueError, match="reduction"):
         GeometricLoss(rep, reduction="sum")
 

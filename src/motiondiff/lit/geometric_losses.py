@@ -8,9 +8,10 @@ FK = the representation's decode to joint positions (metres) of the de-normalise
     L_vel  = 1/(N−1) Σ_i ‖(x0^{i+1} − x0^i) − (x̂0^{i+1} − x̂0^i)‖²      (eq. 5)  on the features the model predicts
     L = L_diffusion + λ_pos L_pos + λ_vel L_vel + λ_foot L_foot
 
-`reduction="equation"` (the paper presets): each norm runs over a whole frame (all joints and coordinates, or all
-features), the mean over frames only, as the equations are written. `reduction="mean"`: the mean over joints (or
-features) too, the convention of this project's earlier CPU experiments (1/J of eq. 3-4, 1/D of eq. 5).
+`reduction="mean"` (the default and the paper presets, as MDM's released code, whose masked L2 divides by frames x
+joints x coordinates): the mean over joints (or features) too, 1/J of eq. 3-4 and 1/D of eq. 5.
+`reduction="equation"`: each norm runs over a whole frame (all joints and coordinates, or all features), the mean
+over frames only, as the equations are written (docs/presets_audit.md has the difference).
 
 f_i is the representation's own contact rule unless ``contact_threshold`` is set: then a foot joint is in contact
 where its ground-truth displacement to the next frame is at most that many metres (MDM's code for its a2m data:
@@ -39,7 +40,7 @@ class GeometricLoss:
     lambda_vel: float = 1.0
     lambda_foot: float = 1.0
     contact_threshold: float | None = None  # metres per frame; None: the representation's rule
-    reduction: str = "equation"  # "equation": MDM eq. 3-5 (sum over a frame, mean over frames) | "mean"
+    reduction: str = "mean"  # "mean": MDM's released code | "equation": eq. 3-5 (sum over a frame, mean over frames)
 
     def __post_init__(self):
         if self.reduction not in REDUCTIONS:

@@ -111,7 +111,9 @@ def _checked_release(path: str | Path, expected: str) -> tuple[dict, dict]:
     bf16 = {k: v for k, v in state.items() if v.dtype == torch.bfloat16}  # numpy has no bfloat16
     check_finite_state(bf16, f"release weights {weights}", RESTORE)
     provenance = meta.get("provenance") if isinstance(meta.get("provenance"), dict) else {}
-    if str(provenance.get("weights_storage", "")).startswith("weight matrices float16"):  # save_release(half_matrices=True): the model computes in float32
+    if str(provenance.get("weights_storage", "")).startswith(
+        "weight matrices float16"
+    ):  # save_release(half_matrices=True): the model computes in float32
         state = {k: v.float() if v.dtype == torch.float16 and v.dim() >= 2 else v for k, v in state.items()}
     return meta, state
 
