@@ -51,7 +51,9 @@ def test_half_matrices_store_matrices_in_float16_and_load_as_float32(module, tmp
     half, config = save_release(module, tmp_path / "half", {"steps": 0}, half_matrices=True)
     stored = load_file(str(half))
     assert {v.dtype for k, v in stored.items() if v.dim() >= 2} == {torch.float16}
-    assert all(v.dtype == module.state_dict()[k].dtype for k, v in stored.items() if v.dim() < 2)  # vectors as they were
+    assert all(
+        v.dtype == module.state_dict()[k].dtype for k, v in stored.items() if v.dim() < 2
+    )  # vectors as they were
     assert half.stat().st_size < 0.6 * full.stat().st_size
     assert json.loads(config.read_text())["provenance"]["weights_storage"].startswith("weight matrices float16")
     loaded = load_release(half)

@@ -2,8 +2,9 @@
 
 A text release carries its prompt-coverage bank, which names the actions of its training captions; each becomes a
 prompt through the phrase table its captions were written with (`data.preparing.captions.CONTENT_PHRASES`), so an
-example is in-domain by construction. An action model's examples are its action names. A model with neither (a
-text model released without a bank, GuidedMotion) gets FALLBACK. Timelines chain three of the examples.
+example is in-domain by construction. An action model's examples are its action names. GuidedMotion, which steers
+each verb of one caption as a local action, gets COMPOUND captions of two to three actions. A text model released
+without a bank gets FALLBACK. Timelines chain three of the examples.
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ from __future__ import annotations
 from motiondiff.data.preparing.captions import CONTENT_PHRASES
 
 FALLBACK = ("a person walks forward", "a person waves the right hand", "a person bows")
+COMPOUND = ("a person walks forward, then raises both hands", "a person waves the right hand, then bows",
+            "a person walks forward, then turns left, and then runs")  # fmt: skip
 TIMELINE_SECONDS = 2  # each example timeline line's length
 TIMELINE_EXAMPLES = 3
 
@@ -23,6 +26,8 @@ def action_prompt(name: str) -> str:
 def example_prompts(pipe) -> list[str]:
     """The prompts (or action names) to offer for ``pipe`` (a MotionPipeline, or any pipeline: FALLBACK)."""
     kind = getattr(pipe, "condition_kind", None)
+    if hasattr(pipe, "latent"):  # GuidedMotionPipeline: one caption, several local actions
+        return list(COMPOUND)
     if kind == "action":
         return list(pipe.actions)
     coverage = getattr(pipe, "coverage", None)

@@ -11,7 +11,7 @@ from types import SimpleNamespace
 import pytest
 
 from motiondiff.data.preparing.captions import CONTENT_PHRASES
-from motiondiff.demo.examples import FALLBACK, example_prompts, example_timelines
+from motiondiff.demo.examples import COMPOUND, FALLBACK, example_prompts, example_timelines
 from motiondiff.demo.inputs import Sampling, parse_weights, share, timeline_items, whole
 from motiondiff.demo.requests import coverage_warnings
 from motiondiff.pipelines.coverage import PromptCoverageWarning
@@ -77,7 +77,9 @@ def test_examples_come_from_the_models_training_actions():
                        "a person new move"]  # fmt: skip
     assert example_prompts(SimpleNamespace(condition_kind="action", actions=["walk", "kick"])) == ["walk", "kick"]
     assert example_prompts(SimpleNamespace(condition_kind="text", coverage=None)) == list(FALLBACK)
-    assert example_prompts(object()) == list(FALLBACK)  # GuidedMotion: no vocabulary of its own
+    assert example_prompts(object()) == list(FALLBACK)  # a pipeline with no vocabulary of its own
+    assert example_prompts(SimpleNamespace(latent=None)) == list(COMPOUND)  # GuidedMotion: several actions a caption
+    assert all(", then " in p for p in COMPOUND)
 
 
 def test_example_timelines_chain_distinct_examples():
