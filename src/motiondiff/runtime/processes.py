@@ -1,4 +1,5 @@
-"""Whether a process is alive: how a lock or a temporary folder named by a pid is told from one a killed run left."""
+"""Processes and their pid locks: whether a process is alive (how a lock or a temporary folder named by a pid is told
+from one a killed run left), and taking such a lock."""
 
 from __future__ import annotations
 
