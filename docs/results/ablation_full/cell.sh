@@ -8,8 +8,7 @@
 # (a background job ignores SIGINT): the checkpoint after the latest evaluation, at most 1,000 steps back, is where
 # the next sitting starts.
 set -u
-cd "$(dirname "$0")/../../.."; source .venv/bin/activate
-lib=$(ls /usr/lib/*/libtcmalloc_minimal.so.4 2>/dev/null | head -1); [ -n "$lib" ] && export LD_PRELOAD=$lib
+cd "$(dirname "$0")/../../.."; source .venv/bin/activate; source docs/results/sittings.sh; use_tcmalloc
 CELL=$1; COND=${2:-text}
 case $COND in
   text) EXTRA="";;
@@ -19,25 +18,29 @@ case $COND in
 esac
 NAME=${COND}_${CELL}; HERE=docs/results/ablation_full
 RUN=outputs/ablation_full/$NAME; SITTING=$HERE/sittings/$NAME.ckpt; CELLDIR=$HERE/cells/$NAME
-finished() {  # the cap reached, or the plateau rule fired at the last evaluation
+finished() {  # the cap reached, or the plateau rule fired at the last evaluation (both read from the preset)
   python - "$RUN/checkpoints/last.ckpt" <<'PY'
 import sys, torch
+from hydra import compose, initialize_config_dir
+from motiondiff.cli.common import REPO_DIR, register_resolvers
 from motiondiff.eval.plateau import plateaued
 try:
     c = torch.load(sys.argv[1], map_location="cpu", weights_only=False)
 except FileNotFoundError:
     sys.exit(1)
+register_resolvers()
+with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
+    cfg = compose("train", overrides=["experiment=ablation_full"])
+rule = cfg.callbacks.plateau
 h = [tuple(x) for x in c["callbacks"].get("PlateauStop", {}).get("history", [])]
-sys.exit(0 if c["global_step"] >= 15000 or plateaued(h, 0.05, 3000, 4000) else 1)
+capped = c["global_step"] >= cfg.trainer.max_steps
+sys.exit(0 if capped or plateaued(h, rule.min_gain, rule.window, rule.start, rule.mode) else 1)
 PY
 }
-if [ ! -f $RUN/checkpoints/last.ckpt ] && [ -f $SITTING ]; then
-  mkdir -p $RUN/checkpoints && cp $SITTING $RUN/checkpoints/last.ckpt
-fi
+ck=$(resume_arg $RUN $SITTING)
 mkdir -p $CELLDIR
 if ! finished; then
-  ck=""; [ -f $RUN/checkpoints/last.ckpt ] && ck="ckpt_path=$RUN/checkpoints/last.ckpt"
-  echo "$(date -u +%FT%TZ) sitting starts ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), ${ck:-from scratch})" >> $CELLDIR/sittings.log
+  log_sitting $CELLDIR/sittings.log "$ck"
   python train.py experiment=ablation_full ablation=$CELL $EXTRA hydra.run.dir=$RUN $ck
   echo "$(date -u +%FT%TZ) sitting ends (exit $?)" >> $CELLDIR/sittings.log
 fi

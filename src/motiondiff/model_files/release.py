@@ -34,6 +34,9 @@ from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.hardware import cpu_has_fast_bf16, cpu_model
 from motiondiff.runtime.provenance import git_state
 
+# provenance["weights_storage"] of a release written with half_matrices: what the loader casts back to float32
+HALF_MATRICES = "weight matrices float16, vectors float32"
+
 
 def save_release(module, path: str | Path, provenance: dict | None = None, half_matrices: bool = False
                  ) -> tuple[Path, Path]:  # fmt: skip
@@ -47,7 +50,7 @@ def save_release(module, path: str | Path, provenance: dict | None = None, half_
         state = {k: v.half() if v.is_floating_point() and v.dim() >= 2 else v for k, v in state.items()}
         check_finite_state(state, f"the model to release as {weights} (float16 matrices)",
                            "release it without half_matrices: a weight is beyond float16's range")  # fmt: skip
-        provenance = {**(provenance or {}), "weights_storage": "weight matrices float16, vectors float32"}
+        provenance = {**(provenance or {}), "weights_storage": HALF_MATRICES}
     hparams = json.loads(json.dumps(dict(module.hparams), default=_plain))  # fails loudly on a non-JSON value
     if isinstance(hparams.get("text_encoder"), dict):  # a release names its encoder; a local path stays local
         hparams["text_encoder"].pop("path", None)
@@ -111,9 +114,7 @@ def _checked_release(path: str | Path, expected: str) -> tuple[dict, dict]:
     bf16 = {k: v for k, v in state.items() if v.dtype == torch.bfloat16}  # numpy has no bfloat16
     check_finite_state(bf16, f"release weights {weights}", RESTORE)
     provenance = meta.get("provenance") if isinstance(meta.get("provenance"), dict) else {}
-    if str(provenance.get("weights_storage", "")).startswith(
-        "weight matrices float16"
-    ):  # save_release(half_matrices=True): the model computes in float32
+    if provenance.get("weights_storage") == HALF_MATRICES:  # save_release(half_matrices=True); the model is float32
         state = {k: v.float() if v.dtype == torch.float16 and v.dim() >= 2 else v for k, v in state.items()}
     return meta, state
 

@@ -1,10 +1,10 @@
 """Which model file a name or path means: the one resolver behind `checkpoint=` on every command and
 `from_pretrained` in the Python API, so both take the same names.
 
-Names: "shipped" (the released model for the condition asked: text, action or guidedmotion), the condition names themselves
-("text", "action", "guidedmotion"), a release's file stem in
-checkpoints/models ("bandai_text_cpu"), "latest" / "best" (the newest training run's last or best-FID checkpoint),
-or a path to a .ckpt / .safetensors / .json file.
+Names: "shipped" (the released model for the condition asked: text, action or guidedmotion), the condition names
+themselves ("text", "action", "guidedmotion"), a release's file stem in checkpoints/models ("bandai_text_cpu"),
+"latest" / "best" (the newest training run's last or best-FID checkpoint), or a path to a .ckpt / .safetensors /
+.json file.
 """
 
 from __future__ import annotations

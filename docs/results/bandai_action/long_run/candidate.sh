@@ -4,8 +4,7 @@
 #   docs/results/bandai_action/long_run/candidate.sh <.ckpt or release> <table name> [key=value ...]
 # Writes docs/results/bandai_action/long_run/val/<table name>.md; needs data/bandai (make data-full).
 set -euo pipefail
-cd "$(dirname "$0")/../../../.."; source .venv/bin/activate
-lib=$(ls /usr/lib/*/libtcmalloc_minimal.so.4 2>/dev/null | head -1); [ -n "$lib" ] && export LD_PRELOAD=$lib
+cd "$(dirname "$0")/../../../.."; source .venv/bin/activate; source docs/results/sittings.sh; use_tcmalloc
 ckpt=$1; name=$2; shift 2
 out=docs/results/bandai_action/long_run/val; run=outputs/action_val/$name
 mkdir -p "$out"
