@@ -178,6 +178,8 @@ CASES = [
     Case("evaluate_smoothing_negative", lambda tmp: run_entry("evaluate", tmp, "checkpoint=shipped", "smooth_sigma=-1", "wandb=false"),
          UsageError, "smooth_sigma is a Gaussian's width in frames"),
     Case("clip_x0_unknown_rule", sample("text=walk", "clip_x0=imagen"), UsageError, "choose none, static or dynamic"),
+    Case("timestep_spacing_unknown", sample("text=walk", "timestep_spacing=trailing"), UsageError,
+         "unknown timestep spacing 'trailing'; choose one of uniform, leading, logsnr"),
     Case("clip_x0_on_a_model_without_range", lambda tmp: run_entry("sample", tmp, f"checkpoint={REPO}/checkpoints/models/bandai_text_cpu.safetensors",
                                                                    "export=none", "text=walk", "clip_x0=static"), UsageError, "has no x0 range"),
     # commands: train.py

@@ -57,6 +57,23 @@ def test_sample_is_deterministic_for_a_seed(text_ckpt, tmp_path):
     np.testing.assert_array_equal(outs[0], outs[1])
 
 
+def test_timestep_spacing_switches_ddim_to_the_official_mdm_steps_and_is_recorded(text_ckpt, tmp_path):
+    """timestep_spacing=leading (MDM's DDIM steps, never t = T−1) changes the motion of a seed and lands in
+    results.json; the default keeps the model's own (null: the sampler's uniform steps)."""
+    joints, recorded = {}, {}
+    for spacing in ("null", "leading"):
+        d = tmp_path / spacing
+        d.mkdir()
+        run_cli("sample.py", f"checkpoint={text_ckpt}", "text=a person bows", "num_samples=1", "length=1",
+                "export=none", "sampler=ddim", "sampler.steps=4", "seed=7", "precision=32",
+                f"timestep_spacing={spacing}", env_dir=d)  # fmt: skip
+        out = next((d / "outputs" / "sample").iterdir())
+        recorded[spacing] = json.loads((out / "results.json").read_text())["timestep_spacing"]
+        joints[spacing] = np.load(out / "a_person_bows_00_joints.npy")
+    assert recorded == {"null": None, "leading": "leading"}
+    assert np.abs(joints["null"] - joints["leading"]).max() > 1e-4
+
+
 def test_action_sampling_and_guidance_sweep(action_ckpt, tmp_path):
     run_cli("sample.py", "-m", f"checkpoint={action_ckpt}", "action=walk", "guidance=1,3", "num_samples=1",
             "length=1", "export=none", "sampler.steps=3", env_dir=tmp_path)  # fmt: skip

@@ -71,15 +71,17 @@ def sampling_steps(cfg: DictConfig, module) -> int | None:
     return fitted_steps(module, None if cfg.steps is None else int(cfg.steps), cfg.sampler.steps)
 
 
-def apply_clip_x0(cfg: DictConfig, module) -> str | None:
-    """clip_x0= (none | static | dynamic; null keeps the model's own rule) set on the module; returns the rule used."""
-    rule = cfg.get("clip_x0")
-    if rule is not None:
-        try:
-            module.set_clip_rule(str(rule))
-        except ValueError as err:
-            raise UsageError(f"clip_x0={rule}: {err}") from err
-    return module.clip_rule
+def apply_step_rules(cfg: DictConfig, module) -> None:
+    """clip_x0= (none | static | dynamic) and timestep_spacing= (uniform | leading | logsnr) set on the module; null
+    keeps the model's own (diffusion.clip_x0, diffusion.timestep_spacing). Read back from module.clip_rule and
+    module.timestep_spacing."""
+    for key, setter in (("clip_x0", module.set_clip_rule), ("timestep_spacing", module.set_timestep_spacing)):
+        value = cfg.get(key)
+        if value is not None:
+            try:
+                setter(str(value))
+            except ValueError as err:
+                raise UsageError(f"{key}={value}: {err}") from err
 
 
 def check_ckpt_path(ckpt_path) -> None:

@@ -11,7 +11,7 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps
+from motiondiff.cli.common import UsageError, apply_step_rules, find_model, sampling_steps
 from motiondiff.cli.outputs import cleanup_option, export_formats, video_size
 from motiondiff.cli.validate import RULES_EDIT, check
 from motiondiff.edit.cleanups import check_for_edit
@@ -75,7 +75,7 @@ def _check(cfg: DictConfig, module) -> int | None:
         )
     if cfg.kind not in KINDS:
         raise UsageError(f"unknown kind {cfg.kind!r}; choose from {', '.join(KINDS)}")
-    apply_clip_x0(cfg, module)
+    apply_step_rules(cfg, module)
     return sampling_steps(cfg, module)
 
 
@@ -138,7 +138,7 @@ def run(cfg: DictConfig) -> Path:
                   "up_axis": None if motion.up is None else motion.up.to_json()},
         "condition": condition,
         "representation": module.representation.name,
-        "settings": {**result.settings, "clip_x0": module.clip_rule},
+        "settings": {**result.settings, "clip_x0": module.clip_rule, "timestep_spacing": module.timestep_spacing},
     }  # fmt: skip
     rows = edited.save(out, formats, cfg.get("bvh_names"), video_size=size, summary=summary)
     for r in rows:

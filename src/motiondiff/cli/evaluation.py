@@ -20,7 +20,7 @@ from omegaconf import DictConfig
 from tqdm import tqdm
 
 from motiondiff import metrics as M
-from motiondiff.cli.common import UsageError, apply_clip_x0, sampling_steps, to_dict
+from motiondiff.cli.common import UsageError, apply_step_rules, sampling_steps, to_dict
 from motiondiff.cli.outputs import smoothing_sigma
 from motiondiff.edit.smoothing import SMOOTHABLE
 from motiondiff.eval import action_table, official, report
@@ -62,7 +62,7 @@ def check_settings(cfg: DictConfig, module) -> tuple[float, int | None, float | 
     if trained_on and _source(trained_on) != _source(cfg.dataset.name):
         raise UsageError(f"the checkpoint was trained on {trained_on!r}; pass dataset={trained_on}")
     sigma = smoothing_sigma(cfg, module)  # sample.py's rule: 0 off, null the model's default
-    apply_clip_x0(cfg, module)
+    apply_step_rules(cfg, module)
     layout = (module.hparams.get("representation") or {}).get("name", "hml263")
     if sigma and layout not in SMOOTHABLE:
         raise UsageError(f"smooth_sigma needs a model of {'/'.join(SMOOTHABLE)} features (vvMDM filters positions); "
@@ -235,7 +235,8 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
         f"{len(EvalClips.from_dataset(dm.dataset(cfg.split)))} {cfg.split} clips; R-precision pools of "
         f"min({cfg.pool_size}, clips)",
         f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}, temporal smoothing "
-        f"sigma {sigma or 'off'}, safe x̂0 {module.clip_rule or 'none'}, {cfg.precision}; "
+        f"sigma {sigma or 'off'}, safe x̂0 {module.clip_rule or 'none'}, timestep spacing "
+        f"{module.timestep_spacing or 'sampler default'}, {cfg.precision}; "
         f"{timings['motions']} motions generated in {timings['generation_s']:.0f} s; whole evaluation {wall:.0f} s",
         f"Real: the real {cfg.split} clips scored against the real train clips",
     ]
@@ -247,7 +248,7 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
     report.write_csv(out / "table.csv", table, protocol)
     extra = {"checkpoint": source, "real": {k: list(v) for k, v in rows["Real"].items()}, "wall_s": wall,
              "timings": timings, "sampler": to_dict(cfg.sampler), "steps": steps,
-             "smooth_sigma": sigma, "clip_x0": module.clip_rule, "replications": reps}  # fmt: skip
+             "smooth_sigma": sigma, "clip_x0": module.clip_rule, "timestep_spacing": module.timestep_spacing, "replications": reps}  # fmt: skip
     report.write_summary_json(out / "metrics.json", guidance, rows["Model"], extra)
     if cfg.wandb:
         _log_wandb(out, cfg, table, {"checkpoint": source, "guidance": guidance})

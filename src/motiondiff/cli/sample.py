@@ -16,7 +16,7 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig, ListConfig
 
-from motiondiff.cli.common import UsageError, apply_clip_x0, find_model, sampling_steps, to_dict
+from motiondiff.cli.common import UsageError, apply_step_rules, find_model, sampling_steps, to_dict
 from motiondiff.cli.outputs import cleanup_option, export_formats, render_option, smoothing_sigma, video_size
 from motiondiff.cli.prompt_inputs import check_one_source, check_prompt_inputs, read_prompts_file, split_timed
 from motiondiff.cli.validate import RULES_SAMPLE, check
@@ -83,7 +83,7 @@ def run(cfg: DictConfig) -> Path:
     sigma = smoothing_sigma(cfg, module)
     guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)  # checked >= 0 by the rules
     steps = sampling_steps(cfg, module)
-    apply_clip_x0(cfg, module)
+    apply_step_rules(cfg, module)
     shape = feed_forward_shape(module, int(cfg.num_samples), frames or int(module.hparams.max_frames))
     pipe = MotionPipeline(module, str(ckpt), inference_precision(cfg.get("precision", "auto"), cfg.device, shape))
     far = [r.warning() for r in far_prompts(module, pipe.coverage, prompts)]
@@ -104,7 +104,8 @@ def run(cfg: DictConfig) -> Path:
                                 resample=cfg.resample, **options)  # fmt: skip
     motions = motions.cleaned(*cleanup) if cleanup else motions
     summary = {"checkpoint": str(ckpt), "sampler": to_dict(cfg.sampler), "guidance": guidance, "steps": steps,
-               "precision": pipe.precision, "clip_x0": module.clip_rule, "coverage_warnings": far,
+               "precision": pipe.precision, "clip_x0": module.clip_rule, "timestep_spacing": module.timestep_spacing,
+               "coverage_warnings": far,
                **({"long_motion": motions.info["long_motion"]} if seconds is not None else {})}  # fmt: skip
     rows = motions.save(out, formats, cfg.get("bvh_names"), body=body, video_size=size, summary=summary)
     what = f"long motion(s) of {motions.seconds():g} s" if seconds is not None else "sample(s)"

@@ -32,7 +32,7 @@ X0Guide = Callable[[Callable[[torch.Tensor], torch.Tensor], torch.Tensor, float,
 ClipX0 = float | Callable[[torch.Tensor], torch.Tensor] | None
 
 
-SPACINGS = ("uniform", "logsnr")
+SPACINGS = ("uniform", "leading", "logsnr")
 
 
 @dataclass(frozen=True)
@@ -66,9 +66,12 @@ class StepOptions:
 def select_timesteps(
     num_steps: int, steps: int | None = None, spacing: str = "uniform", alphas_cumprod: Sequence[float] | None = None
 ) -> list[int]:
-    """``steps`` distinct indices in [0, T−1], ascending, always including 0 and T−1 (one step: just T−1).
+    """``steps`` distinct indices in [0, T−1], ascending, always including 0 and, except for ``leading``, T−1.
 
-    ``uniform`` (DDIM, MDM): k_i = round(i (T−1)/(S−1)); the spacing is ≥ 1 for S ≤ T. ``logsnr`` (DPM-Solver's
+    ``uniform`` (this project's DDIM default): k_i = round(i (T−1)/(S−1)); the spacing is ≥ 1 for S ≤ T.
+    ``leading`` (the official MDM code's DDIM respacing, improved-diffusion's "ddimS"): k_i = i ⌊T/S⌋, so DDIM-50
+    on T = 1000 takes 980, 960, …, 0 and never the last step, where ᾱ ≈ 2e-9 makes an ε model's x̂0 = (x_t −
+    √(1−ᾱ) ε̂)/√ᾱ multiply ε̂'s error by ~2e4 (docs/results/eps_probe). ``logsnr`` (DPM-Solver's
     choice for low-dimensional data): the indices nearest to S values of λ = ½ log(ᾱ/(1−ᾱ)) evenly spaced from λ_{T−1}
     to λ_0 (``alphas_cumprod`` gives ᾱ), taken strictly decreasing from T−1 so that S stay distinct where λ crowds
     (the cosine schedule's last steps). ``None`` keeps all T.
@@ -78,6 +81,8 @@ def select_timesteps(
         raise ValueError(f"steps must be in [1, {num_steps}] (the process has {num_steps} steps), got {steps}")
     if spacing not in SPACINGS:
         raise ValueError(f"unknown timestep spacing {spacing!r}; choose one of {', '.join(SPACINGS)}")
+    if spacing == "leading":
+        return [i * (num_steps // steps) for i in range(steps)]
     if steps == 1:
         return [num_steps - 1]
     if spacing == "uniform" or steps == num_steps:
@@ -150,15 +155,22 @@ def _predict_x0(
 
 @torch.inference_mode()
 def ddpm_sample(
-    diffusion: GaussianDiffusion, model_fn: ModelFn, shape: Sequence[int], *, steps: int | None = None, **options
+    diffusion: GaussianDiffusion,
+    model_fn: ModelFn,
+    shape: Sequence[int],
+    *,
+    steps: int | None = None,
+    spacing: str = "uniform",
+    **options,
 ) -> torch.Tensor:
     """Ancestral sampling (Ho et al. 2020; MDM): x̂0 = to_x0(model_fn(x_t, t)), then x_{t−1} ~ q(x_{t−1} | x_t, x̂0).
 
-    ``steps=S < T`` samples the respaced process (``GaussianDiffusion.respace`` on ``select_timesteps``).
+    ``steps=S < T`` samples the respaced process (``GaussianDiffusion.respace`` on ``select_timesteps(T, S,
+    spacing)``).
     ``noise`` is x_T (else drawn from ``generator``); the last step adds no noise, so the result is the last x̂0.
     """
     o = StepOptions(**options)
-    kept = select_timesteps(diffusion.num_steps, steps)
+    kept = select_timesteps(diffusion.num_steps, steps, spacing, diffusion.alphas_cumprod.tolist())
     resample, generator = _check_resample(o.resample), o.generator
     proc = diffusion if len(kept) == diffusion.num_steps else diffusion.respace(kept)
     alpha_bar = proc.alphas_cumprod.tolist()  # indexed like t_proc
@@ -202,17 +214,19 @@ def ddim_sample(
     *,
     steps: int = 50,
     eta: float = 0.0,
+    spacing: str = "uniform",
     **options,
 ) -> torch.Tensor:
-    """DDIM on ``select_timesteps(T, steps)`` from T−1 down to 0; η = 0 is deterministic, η = 1 is DDPM-like.
+    """DDIM on ``select_timesteps(T, steps, spacing)`` from the highest kept step (T−1 but for ``leading``) down to 0;
+    η = 0 is deterministic, η = 1 is DDPM-like.
 
     ε̂ is recomputed from the (clipped, hooked) x̂0, so edits made in ``x0_hook`` carry into the next x_t.
     The step from t = 0 goes to ᾱ_prev = 1, i.e. returns x̂0.
     """
     o = StepOptions(**options)
-    kept = select_timesteps(diffusion.num_steps, steps)
-    resample, generator = _check_resample(o.resample), o.generator
     alpha_bar = diffusion.alphas_cumprod.tolist()
+    kept = select_timesteps(diffusion.num_steps, steps, spacing, alpha_bar)
+    resample, generator = _check_resample(o.resample), o.generator
     x = o.initial_noise(shape)
     batch = x.shape[0]
     for i in tqdm(range(len(kept) - 1, -1, -1), desc="DDIM", disable=not o.progress, leave=False):

@@ -13,6 +13,7 @@ import torch
 
 from motiondiff.data.representations.spec import representation_from_spec
 from motiondiff.diffusion import GaussianDiffusion, ddim_sample, ddpm_sample, dpmpp_sample, guided_model_fn, make_betas
+from motiondiff.diffusion.samplers import SPACINGS
 from motiondiff.diffusion.thresholding import make_threshold
 from motiondiff.lit.geometric_losses import GeometricLoss
 from motiondiff.lit.known_masks import random_known_keep
@@ -107,6 +108,8 @@ class MotionDiffusion(torch.nn.Module):
                              persistent=False)  # fmt: skip
         self.clip_rule = None
         self.set_clip_rule(diffusion.get("clip_x0") if x0_range is not None else None)  # a bad rule fails here
+        self.timestep_spacing = None
+        self.set_timestep_spacing(diffusion.get("timestep_spacing"))
         self.register_buffer("mean", torch.tensor(mean, dtype=torch.float32))
         self.register_buffer("std", torch.tensor(std, dtype=torch.float32))
         # Caption features of the training data; rebuilt from the text cache at setup, not stored in checkpoints.
@@ -236,6 +239,8 @@ class MotionDiffusion(torch.nn.Module):
         clip = make_threshold(self.clip_rule, self.x0_low, self.x0_high, mask=mask)
         options = dict(generator=generator, x0_hook=x0_hook, xt_hook=xt_hook, x0_guide=x0_guide, progress=progress,
                        resample=resample, device=self.device, clip_x0=clip)  # fmt: skip
+        if self.timestep_spacing is not None:  # else each sampler's own (DDIM, DDPM: uniform; DPM-Solver++: logsnr)
+            options["spacing"] = self.timestep_spacing
         if sampler == "ddim":
             return ddim_sample(self.diffusion, fn, shape, steps=steps or self.default_steps("ddim"), eta=eta, **options)
         if sampler == "ddpm":
@@ -249,6 +254,13 @@ class MotionDiffusion(torch.nn.Module):
         if make_threshold(rule, self.x0_low, self.x0_high) is not None and not self.x0_low.numel():
             raise ValueError("this model has no x0 range (trained before safe x̂0): only clip_x0=none is possible")
         self.clip_rule = rule
+
+    def set_timestep_spacing(self, spacing: str | None) -> None:
+        """Sample on other steps than each sampler's own (None): uniform | leading (the official MDM code's DDIM
+        respacing, which never visits t = T−1) | logsnr (``diffusion.samplers.select_timesteps``)."""
+        if spacing is not None and spacing not in SPACINGS:
+            raise ValueError(f"unknown timestep spacing {spacing!r}; choose one of {', '.join(SPACINGS)} (or null)")
+        self.timestep_spacing = spacing
 
     @property
     def default_guidance(self) -> float:

@@ -203,6 +203,24 @@ def test_logsnr_spacing_is_distinct_and_even_in_log_snr_where_it_can_be(steps):
         select_timesteps(1000, 10, "cubic", ab)
 
 
+def test_leading_spacing_is_the_official_mdm_ddim_respacing_and_the_samplers_take_it():
+    # improved-diffusion's space_timesteps(1000, "ddim50") (MDM's DDIM): range(0, 1000, 20), never t = 999
+    assert select_timesteps(1000, 50, "leading") == list(range(0, 1000, 20))
+    assert select_timesteps(10, 3, "leading") == [0, 3, 6] and select_timesteps(10, 1, "leading") == [0]
+    diff = GaussianDiffusion.create("cosine", 100, prediction="eps")
+    for sample, extra in ((ddim_sample, {}), (ddpm_sample, {})):
+        seen: list[int] = []
+
+        def fn(x, t, seen=seen):
+            seen.append(int(t[0]))
+            return torch.zeros_like(x)
+
+        sample(diff, fn, (1, 3, 2), steps=10, spacing="leading", generator=_gen(0), **extra)
+        assert seen == list(range(90, -1, -10))  # the original step indices, noisiest first
+    with pytest.raises(ValueError, match="unknown timestep spacing 'trailing'"):
+        ddim_sample(diff, _toy_model, (1, 3, 2), steps=10, spacing="trailing")
+
+
 def _toy_model(x, t):
     return torch.tanh(0.5 * x) + 1e-3 * t[:, None, None].to(x.dtype)
 
