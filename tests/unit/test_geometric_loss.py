@@ -132,3 +132,36 @@ def test_mdm_contact_rule_by_hand():
     assert contacts.shape == (1, n - 1, len(rep.contact_joints))
     assert contacts[0, :, 0].tolist() == [1.0, 0.0, 0.0]
     assert bool((contacts[0, :, 1:] == 1).all())  # the other contact joints stand still
+
+
+def test_alpha_bar_time_weighting_scales_each_samples_terms_and_bounds_an_eps_models_x0_error(batch):
+    """time_weighting="alpha_bar": each sample's terms times its ᾱ_t (an ε model's x̂0 error at t = 999 of the cosine
+    schedule is ~2e4 × its ε error; weighted, the terms stay of the ε error's size); "none" ignores ᾱ."""
+    from motiondiff.diffusion import GaussianDiffusion
+
+    rep, x0, mask, mean, std = batch
+    x_hat = x0 + 0.05 * torch.randn(x0.shape, generator=torch.Generator().manual_seed(1), dtype=x0.dtype)
+    alpha_bar = torch.tensor([1.0, 0.5, 0.1, 0.0], dtype=x0.dtype)[: x0.shape[0]]
+    plain = GeometricLoss(rep).terms(x_hat, x0, mask, mean, std)
+    total, weighted = GeometricLoss(rep, time_weighting="alpha_bar")(x_hat, x0, mask, mean, std, alpha_bar=alpha_bar)
+    for k, v in plain.items():
+        torch.testing.assert_close(weighted[k], (v * alpha_bar).mean())
+    torch.testing.assert_close(total, sum(weighted.values()))
+    same, _ = GeometricLoss(rep)(x_hat, x0, mask, mean, std, alpha_bar=alpha_bar)
+    torch.testing.assert_close(same, sum(v.mean() for v in plain.values()))
+    with pytest.raises(ValueError, match="needs each sample's alpha_bar"):
+        GeometricLoss(rep, time_weighting="alpha_bar")(x_hat, x0, mask, mean, std)
+    with pytest.raises(ValueError, match="loss.time_weighting='snr': choose from none, alpha_bar"):
+        GeometricLoss(rep, time_weighting="snr")
+    # an ε network off by 0.01 at t = 999: unweighted velocity term ~(0.01 · 2e4)², weighted back to ~0.01²
+    diff = GaussianDiffusion.create("cosine", 1000, prediction="eps")
+    t = torch.full((x0.shape[0],), 999)
+    x_t = diff.q_sample(x0.float(), t, torch.zeros_like(x0.float()))
+    eps_hat = 0.01 * torch.randn(x0.shape, generator=torch.Generator().manual_seed(2))
+    x0_eps = diff.to_x0(eps_hat, x_t, t).double()
+    ab = diff.alphas_cumprod[t].double()
+    loose = GeometricLoss(rep, lambda_pos=0, lambda_foot=0).terms(x0_eps, x0, mask, mean, std)["vel"]
+    _, bounded = GeometricLoss(rep, lambda_pos=0, lambda_foot=0, time_weighting="alpha_bar")(
+        x0_eps, x0, mask, mean, std, alpha_bar=ab
+    )
+    assert float(loose.min()) > 1e3 and float(bounded["vel"]) < 1e-2

@@ -19,7 +19,10 @@ where its ground-truth displacement to the next frame is at most that many metre
 other joints' terms of eq. 4 are zero.
 
 Means run over valid frames only (frame pairs for the two velocity terms); each sample counts once in the batch.
-The geometric terms are not scaled by the diffusion loss weight w(t) (MDM adds them unweighted).
+The geometric terms are not scaled by the diffusion loss weight w(t) (MDM adds them unweighted). `time_weighting=
+"alpha_bar"` scales each sample's terms by ᾱ_t (vvMDM's ω(t) = SNR/(SNR+1)): an ε network's x̂0 = (x_t −
+√(1−ᾱ) ε̂)/√ᾱ makes ‖x̂0 − x0‖² = (1−ᾱ)/ᾱ ‖ε̂ − ε‖², about 4e8 × at t = 999 of the cosine schedule, and the weight
+bounds it (docs/results/eps_fix).
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import torch
 from motiondiff.diffusion.process import masked_mean_per_sample
 
 REDUCTIONS = ("equation", "mean")
+TIME_WEIGHTINGS = ("none", "alpha_bar")
 
 
 @dataclass
@@ -41,10 +45,13 @@ class GeometricLoss:
     lambda_foot: float = 1.0
     contact_threshold: float | None = None  # metres per frame; None: the representation's rule
     reduction: str = "mean"  # "mean": MDM's released code | "equation": eq. 3-5 (sum over a frame, mean over frames)
+    time_weighting: str = "none"  # "none": MDM's unweighted terms | "alpha_bar": each sample's terms times ᾱ_t
 
     def __post_init__(self):
         if self.reduction not in REDUCTIONS:
             raise ValueError(f"loss.reduction={self.reduction!r}: choose from {', '.join(REDUCTIONS)}")
+        if self.time_weighting not in TIME_WEIGHTINGS:
+            raise ValueError(f"loss.time_weighting={self.time_weighting!r}: choose from {', '.join(TIME_WEIGHTINGS)}")
 
     @property
     def active(self) -> bool:
@@ -96,9 +103,16 @@ class GeometricLoss:
         step = (feet[:, 1:] - feet[:, :-1]).norm(dim=-1)
         return (step <= self.contact_threshold).to(pos.dtype)
 
-    def __call__(self, x0_hat, x0, mask, mean, std) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
-        """(λ-weighted sum averaged over the batch, {term: batch mean}) for logging."""
+    def __call__(
+        self, x0_hat, x0, mask, mean, std, alpha_bar: torch.Tensor | None = None
+    ) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """(λ-weighted sum averaged over the batch, {term: batch mean}) for logging. ``alpha_bar`` (B,): each sample's
+        ᾱ_t, read when ``time_weighting="alpha_bar"`` (then the terms are logged weighted, as they enter the loss)."""
         terms = self.terms(x0_hat, x0, mask, mean, std)
+        if self.time_weighting == "alpha_bar":
+            if alpha_bar is None:
+                raise ValueError("time_weighting='alpha_bar' needs each sample's alpha_bar")
+            terms = {k: v * alpha_bar.to(v.dtype) for k, v in terms.items()}
         weights = {"pos": self.lambda_pos, "vel": self.lambda_vel, "foot": self.lambda_foot}
         total = sum(weights[k] * v.mean() for k, v in terms.items())
         return total, {k: v.mean().detach() for k, v in terms.items()}

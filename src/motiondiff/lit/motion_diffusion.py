@@ -94,6 +94,7 @@ class MotionDiffusion(torch.nn.Module):
         self.representation = representation_from_spec(representation, feature_dim)
         lambdas = {k: float(v) for k, v in (loss or {}).items() if k.startswith("lambda_")}
         threshold, reduction = (loss or {}).get("contact_threshold"), (loss or {}).get("reduction") or "mean"
+        lambdas["time_weighting"] = (loss or {}).get("time_weighting") or "none"
         self.geometric = (GeometricLoss(self.representation, **lambdas, contact_threshold=threshold,
                                         reduction=reduction) if lambdas else None)  # fmt: skip
         if self.geometric is not None and not self.geometric.active:
@@ -192,7 +193,8 @@ class MotionDiffusion(torch.nn.Module):
         parts = {"diffusion": loss.detach()}
         if self.geometric is not None:
             x0_hat = self.diffusion.to_x0(out.float(), x_t.float(), t)
-            geo, terms = self.geometric(x0_hat, x0, mask, self.mean, self.std)
+            alpha_bar = self.diffusion.alphas_cumprod.to(device=t.device, dtype=torch.float32)[t]
+            geo, terms = self.geometric(x0_hat, x0, mask, self.mean, self.std, alpha_bar=alpha_bar)
             loss = loss + geo
             parts.update(terms)
         return loss, parts
