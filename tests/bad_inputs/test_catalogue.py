@@ -180,6 +180,8 @@ CASES = [
     Case("clip_x0_unknown_rule", sample("text=walk", "clip_x0=imagen"), UsageError, "choose none, static or dynamic"),
     Case("timestep_spacing_unknown", sample("text=walk", "timestep_spacing=trailing"), UsageError,
          "unknown timestep spacing 'trailing'; choose one of uniform, leading, logsnr"),
+    Case("timestep_spacing_leading_on_steps_that_do_not_divide", sample("text=walk", "sampler=ddim", "steps=7",
+         "timestep_spacing=leading"), UsageError, "timestep_spacing=leading: leading timestep spacing takes a number of steps that divides"),
     Case("clip_x0_on_a_model_without_range", lambda tmp: run_entry("sample", tmp, f"checkpoint={REPO}/checkpoints/models/bandai_text_cpu.safetensors",
                                                                    "export=none", "text=walk", "clip_x0=static"), UsageError, "has no x0 range"),
     # commands: train.py

@@ -69,10 +69,10 @@ def select_timesteps(
     """``steps`` distinct indices in [0, T−1], ascending, always including 0 and, except for ``leading``, T−1.
 
     ``uniform`` (this project's DDIM default): k_i = round(i (T−1)/(S−1)); the spacing is ≥ 1 for S ≤ T.
-    ``leading`` (the official MDM code's DDIM respacing, improved-diffusion's "ddimS"): k_i = i ⌊T/S⌋, so DDIM-50
-    on T = 1000 takes 980, 960, …, 0 and never the last step, where ᾱ ≈ 2e-9 makes an ε model's x̂0 = (x_t −
-    √(1−ᾱ) ε̂)/√ᾱ multiply ε̂'s error by ~2e4 (docs/results/eps_probe). ``logsnr`` (DPM-Solver's
-    choice for low-dimensional data): the indices nearest to S values of λ = ½ log(ᾱ/(1−ᾱ)) evenly spaced from λ_{T−1}
+    ``leading`` (the official MDM code's DDIM respacing, improved-diffusion's "ddimS"; S must divide T): k_i = i T/S,
+    so DDIM-50 on T = 1000 takes 980, 960, …, 0 and never the last step, where ᾱ ≈ 2e-9 makes an ε model's x̂0 =
+    (x_t − √(1−ᾱ) ε̂)/√ᾱ multiply ε̂'s error by ~2e4 (docs/results/eps_probe). ``logsnr`` (DPM-Solver's choice for
+    low-dimensional data): the indices nearest to S values of λ = ½ log(ᾱ/(1−ᾱ)) evenly spaced from λ_{T−1}
     to λ_0 (``alphas_cumprod`` gives ᾱ), taken strictly decreasing from T−1 so that S stay distinct where λ crowds
     (the cosine schedule's last steps). ``None`` keeps all T.
     """
@@ -82,6 +82,13 @@ def select_timesteps(
     if spacing not in SPACINGS:
         raise ValueError(f"unknown timestep spacing {spacing!r}; choose one of {', '.join(SPACINGS)}")
     if spacing == "leading":
+        if num_steps % steps:  # as space_timesteps("ddimS"), which refuses a stride that does not fit exactly
+            fits = [s for s in range(1, num_steps + 1) if num_steps % s == 0]
+            near = sorted(fits, key=lambda s: abs(s - steps))[:2]
+            raise ValueError(
+                f"leading timestep spacing takes a number of steps that divides {num_steps} (the "
+                f"process's steps), got {steps}; the nearest are {' and '.join(map(str, sorted(near)))}"
+            )
         return [i * (num_steps // steps) for i in range(steps)]
     if steps == 1:
         return [num_steps - 1]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from motiondiff.diffusion.samplers import select_timesteps
 from motiondiff.lit.conditions import condition_batch
 from motiondiff.lit.inpainting import inpaint, known_batch
 from motiondiff.models.bf16_inference import bf16_inference
@@ -54,8 +55,15 @@ def fitted_steps(module, steps, default: int | None) -> int | None:
     if steps is not None:
         if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= num_steps:
             raise UsageError(f"steps must be between 1 and the model's {num_steps} diffusion steps, got {steps!r}")
-        return steps
-    return None if default is None else min(int(default), num_steps)
+    else:
+        steps = None if default is None else min(int(default), num_steps)
+    spacing = getattr(module, "timestep_spacing", None)
+    if spacing is not None:  # a spacing that cannot take these steps is named before anything samples
+        try:
+            select_timesteps(num_steps, steps, spacing, module.diffusion.alphas_cumprod.tolist())
+        except ValueError as err:
+            raise UsageError(f"timestep_spacing={spacing}: {err}") from err
+    return steps
 
 
 def resolved_sampling(module, sampler: str | None, steps) -> tuple[str, int | None]:

@@ -206,7 +206,9 @@ def test_logsnr_spacing_is_distinct_and_even_in_log_snr_where_it_can_be(steps):
 def test_leading_spacing_is_the_official_mdm_ddim_respacing_and_the_samplers_take_it():
     # improved-diffusion's space_timesteps(1000, "ddim50") (MDM's DDIM): range(0, 1000, 20), never t = 999
     assert select_timesteps(1000, 50, "leading") == list(range(0, 1000, 20))
-    assert select_timesteps(10, 3, "leading") == [0, 3, 6] and select_timesteps(10, 1, "leading") == [0]
+    assert select_timesteps(10, 5, "leading") == [0, 2, 4, 6, 8] and select_timesteps(10, 1, "leading") == [0]
+    with pytest.raises(ValueError, match="divides 1000 .* got 7; the nearest are 5 and 8"):
+        select_timesteps(1000, 7, "leading")  # range(0, 1000, 142) has 8 steps: no stride gives exactly 7
     diff = GaussianDiffusion.create("cosine", 100, prediction="eps")
     for sample, extra in ((ddim_sample, {}), (ddpm_sample, {})):
         seen: list[int] = []
