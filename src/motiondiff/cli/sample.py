@@ -82,8 +82,8 @@ def run(cfg: DictConfig) -> Path:
     frames = generation_frames(module, cfg.length, frames=cfg.frames) if seconds is None else None
     sigma = smoothing_sigma(cfg, module)
     guidance = module.default_guidance if cfg.guidance is None else float(cfg.guidance)  # checked >= 0 by the rules
+    apply_step_rules(cfg, module)  # before the steps: fitting them checks them against the spacing asked for
     steps = sampling_steps(cfg, module)
-    apply_step_rules(cfg, module)
     shape = feed_forward_shape(module, int(cfg.num_samples), frames or int(module.hparams.max_frames))
     pipe = MotionPipeline(module, str(ckpt), inference_precision(cfg.get("precision", "auto"), cfg.device, shape))
     far = [r.warning() for r in far_prompts(module, pipe.coverage, prompts)]

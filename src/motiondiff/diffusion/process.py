@@ -198,6 +198,10 @@ class GaussianDiffusion:
         return self.v_from_x0_eps(x0, noise, t)
 
     # ---- loss ---------------------------------------------------------------------------------------------------
+    def alpha_bar(self, t: torch.Tensor, dtype: torch.dtype | None = None) -> torch.Tensor:
+        """ᾱ_t per sample, shape (B,), from the cached tables; float32 by default."""
+        return self._extract("alphas_cumprod", t, torch.empty(0, dtype=dtype or torch.float32, device=t.device))
+
     def loss_weight(self, t: torch.Tensor, dtype: torch.dtype | None = None) -> torch.Tensor:
         """Per-sample weight w(t), shape (B,), for ``self.weighting`` (see the class docstring); float32 by default."""
         return self._extract("loss_weights", t, torch.empty(0, dtype=dtype or torch.float32, device=t.device))

@@ -193,7 +193,8 @@ class MotionDiffusion(torch.nn.Module):
         parts = {"diffusion": loss.detach()}
         if self.geometric is not None:
             x0_hat = self.diffusion.to_x0(out.float(), x_t.float(), t)
-            alpha_bar = self.diffusion.alphas_cumprod.to(device=t.device, dtype=torch.float32)[t]
+            weighted = self.geometric.time_weighting == "alpha_bar"
+            alpha_bar = self.diffusion.alpha_bar(t) if weighted else None
             geo, terms = self.geometric(x0_hat, x0, mask, self.mean, self.std, alpha_bar=alpha_bar)
             loss = loss + geo
             parts.update(terms)
