@@ -62,3 +62,21 @@ def test_the_pipeline_records_the_precision_it_sampled_in():
 
     out = MotionPipeline.from_pretrained("text", precision="32")("a person walks", seconds=1, steps=2)
     assert out.info["precision"] == "32-true"
+
+
+def test_bf16_counts_as_fast_only_with_native_bf16_instructions(monkeypatch):
+    """oneDNN reports bf16 support on any AVX512 CPU and then emulates it (slower than float32): the kernel's flags
+    decide where they can be read; torch's probe alone only where they cannot."""
+    import torch
+
+    from motiondiff.runtime import hardware
+
+    flags = dict.fromkeys(hardware.SPEED_FLAGS, False)
+    monkeypatch.setattr(torch.ops.mkldnn, "_is_mkldnn_bf16_supported", lambda: True, raising=False)
+    for present, expected in (((), True), (("avx2", "avx512f"), False), (("avx512f", "avx512_bf16"), True),
+                              (("avx512f", "amx_bf16", "amx_tile"), True)):  # fmt: skip
+        monkeypatch.setattr(hardware, "cpu_flags", lambda p=present: {**flags, **dict.fromkeys(p, True)})
+        hardware.cpu_has_fast_bf16.cache_clear()
+        assert hardware.cpu_has_fast_bf16() is expected, present
+        assert hardware.fast_cpu_precision() == ("bf16-mixed" if expected else "32-true")
+    hardware.cpu_has_fast_bf16.cache_clear()

@@ -14,7 +14,13 @@ from motiondiff.runtime.errors import UsageError
 
 @functools.cache
 def cpu_has_fast_bf16() -> bool:
-    """True when oneDNN has native bf16 kernels on this CPU."""
+    """True when the CPU has native bf16 instructions (AVX512-BF16 or AMX) and oneDNN has bf16 kernels for it.
+    oneDNN calls bf16 "supported" on every AVX512 CPU, where it converts to float32 around each op: on a Xeon with
+    AVX512F but no AVX512-BF16 its bf16 matmuls measured 2.5-4x slower than float32. So the kernel's CPU flags decide
+    where they can be read, and torch's probe alone only where they cannot (another OS)."""
+    flags = cpu_flags()
+    if any(flags.values()) and not (flags["avx512_bf16"] or flags["amx_bf16"]):
+        return False
     try:
         return bool(torch.ops.mkldnn._is_mkldnn_bf16_supported())
     except (AttributeError, RuntimeError):  # a torch without the probe: judge by the instruction set
