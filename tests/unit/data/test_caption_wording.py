@@ -109,3 +109,36 @@ def test_paraphrase_set_is_kept_out_of_generated_captions():
             clashes += len(free) - len(kept)
     assert clashes > 0  # the generator does produce some of them (short sentences coincide): the filter matters
     assert normalise_caption("  A Man  takes a bow. ") == "a man takes a bow"
+
+
+def test_broad_wording_names_the_action_in_every_sentence_and_adds_context_and_noise_without_touching_sides():
+    """`--caption-wording broad`: no sentence of measurements alone (it fits several actions), context clauses and
+    surface noise on the varied sentences, and the side words the mirror swaps stay intact."""
+    from motiondiff.data.preparing.caption_noise import LEADS, TAILS, broaden
+
+    still = MotionFacts(6.0, 0.1, 0.3, None, 0.0, 0.05, ("right",), ("right",))
+    plain = generate_captions("wave-right-hand", "normal", still, np.random.default_rng(0), variants=12)
+    assert plain[2].endswith("stays in place, with the right hand above the head.")  # the sentence broad replaces
+    pools = [generate_captions("wave-right-hand", "normal", still, np.random.default_rng(s), 12, wording="broad")
+             for s in range(20)]  # fmt: skip
+    assert pools[0][0] == plain[0]  # the same label caption from the same seed
+
+    def names_wave(c: str) -> bool:  # "waves", or one of its letter swaps ("wvaes")
+        return any(sorted(w.strip(".,")) in (sorted("wave"), sorted("waves"), sorted("waved"), sorted("waving"))
+                   for w in c.lower().split())  # fmt: skip
+
+    assert all(names_wave(c) for p in pools for c in p)
+    assert all(
+        p[2].endswith("waves the right hand, staying in place, with the right hand above the head.") for p in pools
+    )
+    varied = [c for p in pools for c in p[3:]]
+    assert any(t in c for c in varied for t in TAILS) and any(c.lower().startswith(LEADS) for c in varied)
+    assert any(not c.endswith(".") for c in varied) and any(c[0].isupper() for c in varied)
+    assert all(c.lower().count("right") >= 1 and "left" not in c.lower() for c in varied)
+    rng = np.random.default_rng(3)
+    swapped = {broaden("someone raises the right hand and waves it.", rng, context=0, noise=1) for _ in range(60)}
+    typos = [c for c in swapped if c.rstrip(".").lower() != "someone raises the right hand and waves it"]
+    assert typos and all("right" in c.lower() for c in swapped)
+    assert all(sorted(c.lower().rstrip(".")) == sorted("someone raises the right hand and waves it") for c in typos)
+    with pytest.raises(ValueError, match="plain or broad"):
+        generate_captions("walk", "normal", still, np.random.default_rng(0), wording="messy")

@@ -5,7 +5,9 @@ Captions are built from two sources and are always marked as generated wherever 
 - what the motion measurably does, from its canonical 22-joint positions (facing +Z at frame 0, x = left, y = up):
   distance and direction travelled, net turn, speed, and which hands rise above the head or shoulders.
 Several phrasings per clip let text-conditioned training see varied wording, as with HumanML3D's 3+ captions; with
-`variants`, many more from `caption_wording` (synonyms, body-part wording, tenses, sentence shapes).
+`variants`, many more from `caption_wording` (synonyms, body-part wording, tenses, sentence shapes); with
+`wording="broad"`, every sentence names the action and the varied ones carry context clauses and surface noise
+(`caption_noise`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motiondiff.data.preparing.caption_noise import broaden
 from motiondiff.data.preparing.caption_wording import varied_captions
 from motiondiff.geometry.skeleton import SMPL22
 
@@ -182,9 +185,13 @@ def generate_captions(
     rng: np.random.Generator,
     variants: int = 0,
     held_out: Collection[str] = frozenset(),
+    wording: str = "plain",
 ) -> list[str]:
     """Phrasings for one clip, all generated: labels only (first: the label caption evaluation uses), labels +
     measured details, measured only, then `variants` sentences in varied wording (`caption_wording`).
+    `wording="broad"`: the third sentence names the action beside what was measured (a sentence of measurements
+    alone, such as "stays in place, with the right hand above the head", fits several actions and teaches none of
+    them), and the varied sentences go through `caption_noise.broaden`.
     `held_out` (normalised with `normalise_caption`): sentences that must never be a training caption, such as an
     evaluation's human-written paraphrases; one the generator happens to produce is left out (the label caption
     takes another subject)."""
@@ -205,9 +212,15 @@ def generate_captions(
         if facts.direction is not None
         else "stays in place"
     )
-    captions.append(_sentence(subjects[2], travel, "", ", ".join(d for d in details if not d.startswith("moving"))))
+    measured = ", ".join(d for d in details if not d.startswith("moving"))
+    if wording == "broad":
+        travel = f"{verb}, {'staying in place' if facts.direction is None else travel.replace('travels', 'travelling')}"
+    elif wording != "plain":
+        raise ValueError(f"caption wording must be plain or broad, got {wording!r}")
+    captions.append(_sentence(subjects[2], travel, "", measured))
     if variants:
-        captions += [c for c in varied_captions(content, style, rng, variants + 3) if c not in captions][:variants]
+        varied = [c for c in varied_captions(content, style, rng, variants + 3) if c not in captions][:variants]
+        captions += [broaden(c, rng) for c in varied] if wording == "broad" else varied
     return captions[:1] + [c for c in captions[1:] if normalise_caption(c) not in held_out]
 
 

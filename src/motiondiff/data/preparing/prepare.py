@@ -42,12 +42,15 @@ def prepare_bandai(
     caption_variants: int = 12,
     rare_to_train: int = 3,
     held_out: list[str | Path] = (),
+    caption_wording: str = "plain",
     **options,
 ) -> dict:
     """Prepare Bandai Namco releases into `out`; returns the report (also saved as report.json).
     `caption_variants`: generated sentences in varied wording per clip, beside the three label/measured ones;
     `rare_to_train`: every clip of a content label with fewer clips than this goes to train (0: none);
     `held_out`: JSON files of descriptions ({"descriptions": [{"text": ...}]}) no generated caption may equal.
+    `caption_wording`: "plain" (clean templates) or "broad" (context clauses, surface noise, no measurements-only
+    sentence: `captions.generate_captions`).
     `options`: those every source takes (`writer.PrepareOptions`: per_group, max_frames, compact, seed, workers,
     force, progress)."""
     opts = PrepareOptions.of("prepare_bandai", options)
@@ -62,7 +65,7 @@ def prepare_bandai(
     if not clips:
         raise PrepareError("no usable clips in " + ", ".join(map(str, sources)))
     saved = {**opts.saved(), "caption_variants": caption_variants, "rare_to_train": rare_to_train,
-             "held_out": [str(p) for p in held_out]}  # fmt: skip
+             "held_out": [str(p) for p in held_out], "caption_wording": caption_wording}  # fmt: skip
     meta = {"captions": GENERATED_NOTE, "license": bandai.ATTRIBUTION}
     with staged_folder(out, opts.force) as build:  # a killed run leaves the old dataset or the new one, never a mixture
         report = process_and_write(clips, skipped, sources, build, joint_map, saved, meta, opts.workers, opts.progress)
@@ -110,6 +113,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=[],
         help="a JSON file of held-out descriptions no generated caption may repeat (repeatable)",
     )
+    b.add_argument(
+        "--caption-wording",
+        choices=("plain", "broad"),
+        default="plain",
+        help="plain: clean generated sentences (default); broad: also context clauses, typos and case noise",
+    )
     add_common_arguments(b)
     v = sub.add_parser("bvh", help="any folder or zip of BVH files, with an optional labels CSV (100STYLE, ...)")
     v.add_argument("--src", action="append", required=True, help="a folder or zip of .bvh files (repeat for several)")
@@ -155,7 +164,8 @@ def _prepare(args) -> int:
                                  up_axis=args.up_axis, **common)  # fmt: skip
         else:
             report = prepare_bandai(args.src, args.out, caption_variants=args.caption_variants,
-                                    rare_to_train=args.rare_to_train, held_out=args.held_out, **common)  # fmt: skip
+                                    rare_to_train=args.rare_to_train, held_out=args.held_out,
+                                    caption_wording=args.caption_wording, **common)  # fmt: skip
     except (PrepareError, SourceError, bandai.BandaiLayoutError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

@@ -189,7 +189,8 @@ def process_and_write(
     per_split = {s: [(c, r) for (c, _, r), sp in zip(kept, split_of, strict=True) if sp == s] for s in SPLITS}
     variants = int(options.get("caption_variants") or 0)
     held_out = load_held_out(options.get("held_out") or [])
-    arrays = {s: _split_arrays(per_split[s], labels, seed, variants, held_out) for s in SPLITS}
+    wording = options.get("caption_wording") or "plain"
+    arrays = {s: _split_arrays(per_split[s], labels, seed, variants, held_out, wording) for s in SPLITS}
     mean, std = mean_std(arrays["train"]["features"])
     for s in SPLITS:
         save_split(out / f"{s}.npz", arrays[s], compact=compact)
@@ -306,6 +307,7 @@ def _split_arrays(
     seed: int,
     variants: int = 0,
     held_out: frozenset[str] = frozenset(),
+    wording: str = "plain",
 ) -> dict:
     if not items:
         raise PrepareError("a split came out empty: too few clips were selected (raise --per-group)")
@@ -318,7 +320,7 @@ def _split_arrays(
             captions.append(list(given))
             continue
         rng = np.random.default_rng(caption_seed(seed, c.name, variants))
-        captions.append(generate_captions(c.content, c.style, r.facts, rng, variants, held_out))
+        captions.append(generate_captions(c.content, c.style, r.facts, rng, variants, held_out, wording))
     native = items[0][1].native
     arrays = {
         "ids": np.array([c.name for c, _ in items]),
