@@ -124,6 +124,13 @@ def test_output_is_a_file(tmp_path, zips):
     assert out.read_text() == "precious"
 
 
+def test_unknown_caption_wording_is_refused_before_any_work(tmp_path, zips):
+    out = tmp_path / "out"
+    with pytest.raises(PrepareError, match=r"caption_wording='messy': choose plain or broad"):
+        prepare_bandai([zips[0]], out, caption_wording="messy", progress=False)
+    assert not out.exists()
+
+
 def test_unreadable_zip_and_missing_source(tmp_path):
     broken = tmp_path / "broken.zip"
     broken.write_bytes(b"PK\x03\x04 not really a zip")

@@ -54,6 +54,8 @@ def prepare_bandai(
     `options`: those every source takes (`writer.PrepareOptions`: per_group, max_frames, compact, seed, workers,
     force, progress)."""
     opts = PrepareOptions.of("prepare_bandai", options)
+    if caption_wording not in ("plain", "broad"):
+        raise PrepareError(f"caption_wording={caption_wording!r}: choose plain or broad")
     out = Path(out)
     check_output(out, opts.force)
     joint_map = JointMap.load("bandai_to_smpl22")
