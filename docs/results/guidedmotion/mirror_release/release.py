@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from motiondiff.model_files.release import cpu_description, release_checkpoint
+from motiondiff.runtime.hardware import fast_cpu_precision
 
 gc = Path(sys.argv[1] if len(sys.argv) > 1 else "outputs/guided_mirror")
 stages = {s: json.loads((gc / s / "run.json").read_text()) for s in ("vae_motion", "vae_action", "vae_specific", "latent_v")}
@@ -25,7 +26,7 @@ release_checkpoint(
     "docs/results/guidedmotion/mirror_release/run.sh",
     train_minutes=minutes,
     vae_steps={s: stages[s]["train_steps"] for s in ("vae_motion", "vae_action", "vae_specific")},
-    precision="32-true",
+    precision=fast_cpu_precision(),  # what the CPU presets trained the stages in (run this on the machine that trained)
     machine=cpu_description(),
     license="CC BY-NC 4.0: derived from the Bandai Namco Research Motion Dataset (Bandai Namco Research Inc.)",
 )
