@@ -24,9 +24,10 @@ Summary = dict[str, tuple[float, float, int]]
 
 Z_95 = 1.96  # two-sided 95% normal quantile, as in the paper
 MISSING = "–"  # en dash for a metric a method has no value for
-# columns shown only when some row has them: FID against train (where train != the split), smoothness of a
-# representation's own features (vvMDM Fig. 2; models not on HumanML3D features)
-OPTIONAL = {"fid_train", "smoothness_own"}
+# columns shown only when some row has them, per protocol: FID against train (where train != the split), the
+# smoothness of action-conditioned motion (vvMDM Tab. 1 reports it for action models too; evaluations before it was
+# measured have none), smoothness of a representation's own features (vvMDM Fig. 2; models not on HumanML3D features)
+OPTIONAL = {"text": set(), "action": {"fid_train", "smoothness"}, "unconstrained": {"smoothness_own"}}
 
 # protocol -> columns (metric key, header, direction); "→" means closer to Real is better, as in the MDM paper
 LAYOUTS: dict[str, list[tuple[str, str, str]]] = {
@@ -47,6 +48,7 @@ LAYOUTS: dict[str, list[tuple[str, str, str]]] = {
         ("accuracy", "Accuracy", "↑"),
         ("diversity", "Diversity", "→"),
         ("multimodality", "MultiModality", "→"),
+        ("smoothness", "Smoothness", "↑"),  # optional
     ],
     "unconstrained": [  # MDM Table 4; smoothness is vvMDM's addition
         ("fid", "FID", "↓"),
@@ -112,7 +114,8 @@ def format_markdown(
     rows: dict[str, Summary], protocol: str, title: str | None = None, notes: list[str] | None = None
 ) -> str:
     """A Markdown table: a "Method" column, then the protocol's metric columns; one row per entry, order kept."""
-    layout = [c for c in _layout(protocol) if c[0] not in OPTIONAL or any(c[0] in r for r in rows.values())]
+    optional = OPTIONAL[protocol] if protocol in OPTIONAL else set()
+    layout = [c for c in _layout(protocol) if c[0] not in optional or any(c[0] in r for r in rows.values())]
     header = ["Method"] + [f"{head} {arrow}" for _, head, arrow in layout]
     lines = []
     if title:

@@ -71,6 +71,9 @@ def test_markdown_table():
 def test_write_markdown(tmp_path):
     path = write_markdown(tmp_path / "t.md", format_markdown(ROWS, "action"))
     assert "| Method | FID ↓ | Accuracy ↑ | Diversity → | MultiModality → |" in path.read_text(encoding="utf-8")
+    # an action model's smoothness (vvMDM Tab. 1) is a column as soon as a row has it
+    smooth = {m: {**r, "smoothness": (0.5, 0.01, 2)} for m, r in ROWS.items()}
+    assert "| MultiModality → | Smoothness ↑ |" in format_markdown(smooth, "action")
 
 
 def test_csv_round_trip(tmp_path):
