@@ -27,7 +27,7 @@ MISSING = "–"  # en dash for a metric a method has no value for
 # columns shown only when some row has them, per protocol: FID against train (where train != the split), the
 # smoothness of action-conditioned motion (vvMDM Tab. 1 reports it for action models too; evaluations before it was
 # measured have none), smoothness of a representation's own features (vvMDM Fig. 2; models not on HumanML3D features)
-OPTIONAL = {"text": set(), "action": {"fid_train", "smoothness"}, "unconstrained": {"smoothness_own"}}
+OPTIONAL = {"action": {"fid_train", "smoothness"}, "unconstrained": {"smoothness_own"}}
 
 # protocol -> columns (metric key, header, direction); "→" means closer to Real is better, as in the MDM paper
 LAYOUTS: dict[str, list[tuple[str, str, str]]] = {
@@ -114,7 +114,7 @@ def format_markdown(
     rows: dict[str, Summary], protocol: str, title: str | None = None, notes: list[str] | None = None
 ) -> str:
     """A Markdown table: a "Method" column, then the protocol's metric columns; one row per entry, order kept."""
-    optional = OPTIONAL[protocol] if protocol in OPTIONAL else set()
+    optional = OPTIONAL.get(protocol, set())
     layout = [c for c in _layout(protocol) if c[0] not in optional or any(c[0] in r for r in rows.values())]
     header = ["Method"] + [f"{head} {arrow}" for _, head, arrow in layout]
     lines = []

@@ -52,12 +52,12 @@ def broaden(sentence: str, rng: np.random.Generator, context: float = 0.4, noise
 def _swap_letters(text: str, rng: np.random.Generator) -> str:
     """Swap two adjacent inner letters of one word of 5+ letters ("raises" -> "riases"); unchanged if none fits."""
     words = text.split(" ")
-    fits = [i for i, w in enumerate(words) if len(w.strip(".,")) >= 5 and w.strip(".,").isalpha()
-            and w.strip(".,").lower() not in _KEEP]  # fmt: skip
+    cores = [w.strip(".,") for w in words]
+    fits = [i for i, c in enumerate(cores) if len(c) >= 5 and c.isalpha() and c.lower() not in _KEEP]
     if not fits:
         return text
     i = int(rng.choice(fits))
     w = words[i]
-    j = int(rng.integers(1, len(w.rstrip(".,")) - 2))  # an inner pair: the first and last letters stay
+    j = int(rng.integers(1, len(cores[i]) - 2))  # an inner pair: the first and last letters stay
     words[i] = w[:j] + w[j + 1] + w[j] + w[j + 2 :]
     return " ".join(words)

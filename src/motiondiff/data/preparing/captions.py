@@ -171,6 +171,7 @@ def _turn_phrase(turn: float) -> str:
 
 
 SUBJECTS = ("a person", "someone", "a man", "a woman", "the person")
+WORDINGS = ("plain", "broad")  # generate_captions(wording=...): clean templates, or also context and surface noise
 
 
 def normalise_caption(text: str) -> str:
@@ -215,8 +216,8 @@ def generate_captions(
     measured = ", ".join(d for d in details if not d.startswith("moving"))
     if wording == "broad":
         travel = f"{verb}, {'staying in place' if facts.direction is None else travel.replace('travels', 'travelling')}"
-    elif wording != "plain":
-        raise ValueError(f"caption wording must be plain or broad, got {wording!r}")
+    elif wording not in WORDINGS:
+        raise ValueError(f"caption wording must be {' or '.join(WORDINGS)}, got {wording!r}")
     captions.append(_sentence(subjects[2], travel, "", measured))
     if variants:
         varied = [c for c in varied_captions(content, style, rng, variants + 3) if c not in captions][:variants]

@@ -20,7 +20,7 @@ from pathlib import Path
 from motiondiff.data.formats.archive import Source, SourceError
 from motiondiff.data.formats.joint_map import JointMap
 from motiondiff.data.formats.prepared import SPLITS
-from motiondiff.data.preparing.captions import GENERATED_NOTE
+from motiondiff.data.preparing.captions import GENERATED_NOTE, WORDINGS
 from motiondiff.data.preparing.staging import staged_folder
 from motiondiff.data.preparing.writer import (  # noqa: F401  (PrepareError, check_output, caption_seed, load_held_out: part of this module's API)
     PrepareError,
@@ -54,8 +54,8 @@ def prepare_bandai(
     `options`: those every source takes (`writer.PrepareOptions`: per_group, max_frames, compact, seed, workers,
     force, progress)."""
     opts = PrepareOptions.of("prepare_bandai", options)
-    if caption_wording not in ("plain", "broad"):
-        raise PrepareError(f"caption_wording={caption_wording!r}: choose plain or broad")
+    if caption_wording not in WORDINGS:
+        raise PrepareError(f"caption_wording={caption_wording!r}: choose {' or '.join(WORDINGS)}")
     out = Path(out)
     check_output(out, opts.force)
     joint_map = JointMap.load("bandai_to_smpl22")
@@ -117,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     b.add_argument(
         "--caption-wording",
-        choices=("plain", "broad"),
+        choices=WORDINGS,
         default="plain",
         help="plain: clean generated sentences (default); broad: also context clauses, typos and case noise",
     )
