@@ -88,3 +88,22 @@ def test_a_run_killed_before_its_lock_goes_an_hour_later_and_a_logged_one_stays(
     assert not old.exists()
     assert recent.exists(), "a run may be between Hydra's start files and its lock right now"
     assert logged.exists(), "a run that logged got to work: never removed without a lock"
+
+
+def test_the_sigterm_line_names_the_checkpoint_that_is_kept(tmp_path):
+    from motiondiff.runtime.boundary import _resume_hint
+
+    folder = tmp_path / "checkpoints"
+    assert _resume_hint(tmp_path) == "; nothing of this run is kept"
+    folder.mkdir()
+    (folder / "step5.ckpt").write_bytes(b"x")  # stopped between the step checkpoint and its last.ckpt copy
+    (folder / "step10.ckpt").write_bytes(b"x")
+    assert (
+        _resume_hint(tmp_path)
+        == f"; its last checkpoint (step 10) is kept: resume with ckpt_path={folder / 'step10.ckpt'}"
+    )
+    (folder / "last.ckpt").write_bytes(b"x")
+    assert (
+        _resume_hint(tmp_path)
+        == f"; its last checkpoint (step 10) is kept: resume with ckpt_path={folder / 'last.ckpt'}"
+    )

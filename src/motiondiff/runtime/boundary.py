@@ -107,13 +107,19 @@ def stop_on_sigterm(out: Path | None = None, kept: str | None = None):
 
 
 def _resume_hint(out: Path | None) -> str:
-    """Where a stopped training run can go on from: its last checkpoint and that checkpoint's step."""
-    last = Path(out) / "checkpoints" / "last.ckpt" if out is not None else None
-    if last is None or not last.is_file():
+    """Where a stopped training run can go on from: its last checkpoint and that checkpoint's step. A stop that
+    lands between a step checkpoint and its last.ckpt copy names the step checkpoint (it is what is kept)."""
+    if out is None:
         return "; nothing of this run is kept"
-    steps = [int(p.stem[4:]) for p in last.parent.glob("step*.ckpt") if p.stem[4:].isdigit()]
-    at = f" (step {max(steps)})" if steps else ""
-    return f"; its last checkpoint{at} is kept: resume with ckpt_path={last}"
+    folder = Path(out) / "checkpoints"
+    steps = sorted((int(p.stem[4:]), p) for p in folder.glob("step*.ckpt") if p.stem[4:].isdigit())
+    last = folder / "last.ckpt"
+    if last.is_file():
+        at = f" (step {steps[-1][0]})" if steps else ""
+        return f"; its last checkpoint{at} is kept: resume with ckpt_path={last}"
+    if steps:
+        return f"; its last checkpoint (step {steps[-1][0]}) is kept: resume with ckpt_path={steps[-1][1]}"
+    return "; nothing of this run is kept"
 
 
 def _fresh(out: Path, job_name: str) -> bool:
