@@ -103,6 +103,9 @@ def test_the_sigterm_line_names_the_checkpoint_that_is_kept(tmp_path):
         == f"; its last checkpoint (step 10) is kept: resume with ckpt_path={folder / 'step10.ckpt'}"
     )
     (folder / "last.ckpt").write_bytes(b"x")
+    os.utime(folder / "last.ckpt", (time.time() - 60, time.time() - 60))  # the copy of step 5, not yet of step 10
+    assert _resume_hint(tmp_path).endswith(f"ckpt_path={folder / 'step10.ckpt'}")
+    os.utime(folder / "last.ckpt")
     assert (
         _resume_hint(tmp_path)
         == f"; its last checkpoint (step 10) is kept: resume with ckpt_path={folder / 'last.ckpt'}"

@@ -108,16 +108,16 @@ def stop_on_sigterm(out: Path | None = None, kept: str | None = None):
 
 def _resume_hint(out: Path | None) -> str:
     """Where a stopped training run can go on from: its last checkpoint and that checkpoint's step. A stop that
-    lands between a step checkpoint and its last.ckpt copy names the step checkpoint (it is what is kept)."""
+    lands between a step checkpoint and its last.ckpt copy names the step checkpoint (the newest one kept)."""
     if out is None:
         return "; nothing of this run is kept"
     folder = Path(out) / "checkpoints"
     steps = sorted((int(p.stem[4:]), p) for p in folder.glob("step*.ckpt") if p.stem[4:].isdigit())
     last = folder / "last.ckpt"
-    if last.is_file():
+    if last.is_file() and (not steps or last.stat().st_mtime >= steps[-1][1].stat().st_mtime):
         at = f" (step {steps[-1][0]})" if steps else ""
         return f"; its last checkpoint{at} is kept: resume with ckpt_path={last}"
-    if steps:
+    if steps:  # last.ckpt not yet copied from the newest step checkpoint
         return f"; its last checkpoint (step {steps[-1][0]}) is kept: resume with ckpt_path={steps[-1][1]}"
     return "; nothing of this run is kept"
 
