@@ -7,15 +7,7 @@ set -u
 cd "$(dirname "$0")/../../.."
 here=docs/results/eps_fix
 t0=outputs/ablation_full/action_eps_hml263/checkpoints/step0002000.ckpt; t1=outputs/eps_fix/t1/checkpoints/step0002000.ckpt
-until_checkpoint() {  # run the command in the background until the checkpoint exists, then kill it (kill -9: it ignores SIGINT)
-  local ckpt=$1 log=$2; shift 2
-  [ -f "$ckpt" ] && return 0
-  "$@" > "$log" 2>&1 & local pid=$!
-  while [ ! -f "$ckpt" ] && kill -0 $pid 2>/dev/null; do sleep 10; done
-  local size=-1; while [ "$(stat -c %s "$ckpt" 2>/dev/null)" != "$size" ]; do size=$(stat -c %s "$ckpt"); sleep 5; done
-  pkill -9 -P $pid; kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
-  [ -f "$ckpt" ]
-}
+source docs/results/sittings.sh  # until_checkpoint
 until_checkpoint $t0 outputs/eps_fix_t0.log docs/results/ablation_full/cell.sh eps_hml263 action || exit 1
 grep -q "stopped after its step-2,000" docs/results/ablation_full/cells/action_eps_hml263/sittings.log || \
   echo "$(date -u +%FT%TZ) sitting stopped after its step-2,000 checkpoint (docs/results/eps_fix/rules.md: T0)" \
