@@ -37,16 +37,24 @@ capped = c["global_step"] >= cfg.trainer.max_steps
 sys.exit(0 if capped or plateaued(h, rule.min_gain, rule.window, rule.start, rule.mode) else 1)
 PY
 }
+copy_curves() {  # each sitting's CSV log beside sittings.log, named by the steps it holds (a longer copy replaces a shorter)
+  for f in $RUN/csv/version_*/metrics.csv; do
+    [ -f "$f" ] || continue
+    read -r first last < <(awk -F, 'NR==1{for(i=1;i<=NF;i++) if($i=="step") c=i; next} $c!=""{if(min==""||$c<min)min=$c; if($c>max)max=$c} END{print min+0, max+0}' "$f")
+    rm -f $CELLDIR/curve_steps_${first}-*.csv; cp "$f" $CELLDIR/curve_steps_${first}-${last}.csv
+  done
+}
 ck=$(resume_arg $RUN $SITTING)
 mkdir -p $CELLDIR
 if ! finished; then
   log_sitting $CELLDIR/sittings.log "$ck"
   python train.py experiment=ablation_full ablation=$CELL $EXTRA hydra.run.dir=$RUN $ck
   echo "$(date -u +%FT%TZ) sitting ends (exit $?)" >> $CELLDIR/sittings.log
+  copy_curves
 fi
 finished || exit 0
 if [ ! -f $CELLDIR/test/metrics.json ]; then
   best=$(ls $RUN/checkpoints/best-fid-*.ckpt | head -1)
   python evaluate.py checkpoint=$best split=test replications=20 mm_replications=0 hydra.run.dir=$CELLDIR/test
 fi
-for f in $RUN/csv/version_*/metrics.csv; do cp $f $CELLDIR/curve_$(basename $(dirname $f)).csv; done  # one per sitting
+copy_curves

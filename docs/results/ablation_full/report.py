@@ -7,8 +7,8 @@ it came at, the wall minutes of its sittings (sittings.log) and the CPU minutes 
 (`compute/cpu_minutes`, from the sittings that had it), and, once the cell has stopped, the test evaluation of its
 best-val-FID checkpoint (20 replications) with the convergence mark of the plan (docs/results/ablation_plan.md):
 R-precision top-3 ≥ 70 % of the real clips' (text cells) or accuracy ≥ 80 % of real (action cells).
-The curves are read from the run folders (outputs/ablation_full/<cell>) where this machine has them, else from the
-curve_*.csv files cell.sh copies beside the cell's sittings.log when the cell stops.
+The curves are read from the run folders (outputs/ablation_full/<cell>) where this machine has them and from the
+curve_*.csv files cell.sh copies beside the cell's sittings.log after each sitting (other machines' sittings).
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ LINE = re.compile(r"^(\S+Z) sitting (starts|ends|stopped)")
 
 def curve(cell: str) -> list[dict]:
     """The logged rows of every sitting of a cell, in step order."""
-    files = sorted((RUNS / cell).glob("csv/version_*/metrics.csv")) or sorted(
+    files = sorted((RUNS / cell).glob("csv/version_*/metrics.csv")) + sorted(
         (HERE / "cells" / cell).glob("curve_*.csv")
     )
     rows = [r for f in files for r in csv.DictReader(open(f))]
@@ -52,7 +52,8 @@ def curve(cell: str) -> list[dict]:
 
 
 def column(rows: list[dict], key: str) -> list[tuple[int, float]]:
-    return [(int(r["step"]), float(r[key])) for r in rows if r.get(key)]
+    """(step, value) of one logged key, one per step (a run folder and its copies beside sittings.log overlap)."""
+    return sorted({int(r["step"]): float(r[key]) for r in rows if r.get(key)}.items())
 
 
 def wall_minutes(cell: str) -> float | None:
