@@ -24,6 +24,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from motiondiff.eval.plateau import plateaued  # noqa: E402
+
 HERE = Path(__file__).parent
 RUNS = HERE.parents[2] / "outputs" / "ablation_full"
 REPS = ("hml263", "jp", "rp6jr", "rpqjr")
@@ -39,6 +41,10 @@ TABLES = {  # the plan's tables: (title, cells as <condition>_<conf/ablation ent
                    [f"none_{p}_{r}" for p in ("x0", "eps", "v") for r in REPS]),
 }  # fmt: skip
 LABELS = {"text_x0_hml263": "trans_enc (T = 1000)"}
+CAP, PLATEAU = (
+    15000,
+    {"min_gain": 0.05, "window": 3000, "start": 4000},
+)  # the plan's rule (conf/experiment/ablation_full.yaml)
 LINE = re.compile(r"^(\S+Z) sitting (starts|ends|stopped)")
 
 
@@ -79,8 +85,12 @@ def cell_row(cell: str) -> dict:
     fid = column(rows, "val/fid")
     cpu = column(rows, "compute/cpu_minutes")
     test = HERE / "cells" / cell / "test" / "metrics.json"
-    state = "done" if test.is_file() else ("in sittings" if rows else "not started")
-    return {"cell": cell, "state": state, "steps": max((int(r["step"]) for r in rows), default=0), "fid": fid,
+    steps = max((int(r["step"]) for r in rows), default=0)
+    stopped = steps >= CAP - 1 or plateaued(fid, **PLATEAU)  # logged steps are one short of the checkpoint's
+    state = (
+        "done" if test.is_file() else "stopped, test to run" if stopped else "in sittings" if rows else "not started"
+    )
+    return {"cell": cell, "state": state, "steps": steps, "fid": fid,
             "best": min(fid, key=lambda x: x[1]) if fid else None, "wall": wall_minutes(cell),
             "cpu": cpu[-1][1] if cpu else None, "test": json.loads(test.read_text()) if test.is_file() else None}  # fmt: skip
 
