@@ -55,6 +55,7 @@ fi
 finished || exit 0
 if [ ! -f $CELLDIR/test/metrics.json ]; then
   best=$(ls $RUN/checkpoints/best-fid-*.ckpt | head -1)
-  python evaluate.py checkpoint=$best split=test replications=20 mm_replications=0 hydra.run.dir=$CELLDIR/test
+  python evaluate.py checkpoint=$best dataset=bandai split=test replications=20 mm_replications=0 wandb=false \
+    hydra.run.dir=$CELLDIR/test
 fi
 copy_curves
