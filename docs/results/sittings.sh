@@ -36,3 +36,15 @@ until_checkpoint() {
   pkill -9 -P $pid; kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
   [ -f "$ckpt" ]
 }
+
+# cell_until_step CELL COND STEP WHY: issue 43's ablation cell (ablation_full/cell.sh CELL COND) run until its
+# checkpoint at STEP (a 7-digit step number), then stopped and the stop written once into the cell's sittings.log
+# with WHY (the study that stopped it); its later sittings go on from that checkpoint.
+cell_until_step() {
+  local cell=$1 cond=$2 step=$3 why=$4 cells=docs/results/ablation_full/cells
+  local steps; steps=$(echo $((10#$step)) | sed ':a;s/\B[0-9]\{3\}\>/,&/;ta')  # 0002000 -> 2,000
+  until_checkpoint outputs/ablation_full/${cond}_$cell/checkpoints/step$step.ckpt outputs/${cond}_${cell}_to_$step.log \
+    docs/results/ablation_full/cell.sh "$cell" "$cond" || return 1
+  grep -q "stopped after its step-$steps" $cells/${cond}_$cell/sittings.log || \
+    echo "$(date -u +%FT%TZ) sitting stopped after its step-$steps checkpoint ($why)" >> $cells/${cond}_$cell/sittings.log
+}

@@ -23,6 +23,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from omegaconf import OmegaConf  # noqa: E402
 
 from motiondiff.eval.plateau import plateaued  # noqa: E402
 
@@ -41,10 +42,9 @@ TABLES = {  # the plan's tables: (title, cells as <condition>_<conf/ablation ent
                    [f"none_{p}_{r}" for p in ("x0", "eps", "v") for r in REPS]),
 }  # fmt: skip
 LABELS = {"text_x0_hml263": "trans_enc (T = 1000)"}
-CAP, PLATEAU = (
-    15000,
-    {"min_gain": 0.05, "window": 3000, "start": 4000},
-)  # the plan's rule (conf/experiment/ablation_full.yaml)
+PRESET = OmegaConf.load(HERE.parents[2] / "conf" / "experiment" / "ablation_full.yaml")  # the plan's cap and rule
+CAP = PRESET.trainer.max_steps
+PLATEAU = {k: PRESET.callbacks.plateau[k] for k in ("min_gain", "window", "start", "mode")}
 LINE = re.compile(r"^(\S+Z) sitting (starts|ends|stopped)")
 
 
@@ -53,7 +53,7 @@ def curve(cell: str) -> list[dict]:
     files = sorted((RUNS / cell).glob("csv/version_*/metrics.csv")) + sorted(
         (HERE / "cells" / cell).glob("curve_*.csv")
     )
-    rows = [r for f in files for r in csv.DictReader(open(f))]
+    rows = [r for f in files for r in csv.DictReader(f.read_text().splitlines())]
     return sorted(rows, key=lambda r: int(r["step"]))
 
 

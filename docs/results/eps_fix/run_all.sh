@@ -7,11 +7,8 @@ set -u
 cd "$(dirname "$0")/../../.."
 here=docs/results/eps_fix
 t0=outputs/ablation_full/action_eps_hml263/checkpoints/step0002000.ckpt; t1=outputs/eps_fix/t1/checkpoints/step0002000.ckpt
-source docs/results/sittings.sh  # until_checkpoint
-until_checkpoint $t0 outputs/eps_fix_t0.log docs/results/ablation_full/cell.sh eps_hml263 action || exit 1
-grep -q "stopped after its step-2,000" docs/results/ablation_full/cells/action_eps_hml263/sittings.log || \
-  echo "$(date -u +%FT%TZ) sitting stopped after its step-2,000 checkpoint (docs/results/eps_fix/rules.md: T0)" \
-  >> docs/results/ablation_full/cells/action_eps_hml263/sittings.log
+source docs/results/sittings.sh  # until_checkpoint, cell_until_step
+cell_until_step eps_hml263 action 0002000 "docs/results/eps_fix/rules.md: T0" || exit 1
 until_checkpoint $t1 outputs/eps_fix_t1.log $here/t1.sh || exit 1
 m() { [ -f $here/val/$2.json ] || $here/measure.sh "$@"; }
 m $t0 S0 uniform none; m $t0 S1 leading none; m $t0 S2 uniform static; m $t0 S3 leading static

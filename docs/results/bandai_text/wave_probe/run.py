@@ -19,7 +19,7 @@ names = ev.action_names
 
 
 def verdicts(feats) -> str:
-    counts = collections.Counter(names[k] for k in ev.embed_motion(feats)["action_logits"].argmax(-1))
+    counts = collections.Counter(names[k] for k in B.classify(ev, feats))
     return ", ".join(f"{a} {n}" for a, n in counts.most_common(3))
 
 

@@ -32,6 +32,6 @@ for samp in [
         samp,
         collections.Counter(names[i] for i in p).most_common(2),
         "speed",
-        round(float(np.median(B.Behaviour.of(j, 20).speed)), 3),
+        round(float(np.median(B.Behaviour.of(j, m.hparams.fps).speed)), 3),
         flush=True,
     )
