@@ -22,7 +22,10 @@ resume_arg() {
 
 # log_sitting LOG CKPT_ARG: a line with the time, the CPU and where the sitting starts from.
 log_sitting() {
-  echo "$(date -u +%FT%TZ) sitting starts ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), ${2:-from scratch})" >> "$1"
+  local cpu precision  # the precision conf/trainer/cpu.yaml picks on this CPU
+  cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)
+  precision=$(python -c 'from motiondiff.runtime.hardware import fast_cpu_precision as p; print(p())')
+  echo "$(date -u +%FT%TZ) sitting starts ($cpu, $(nproc) cores, $precision, ${2:-from scratch})" >> "$1"
 }
 
 # until_checkpoint CKPT LOG COMMAND...: run COMMAND in the background until CKPT exists and has stopped growing, then

@@ -80,6 +80,15 @@ def wall_minutes(cell: str) -> float | None:
     return sum(spans) if spans else None
 
 
+def machines(cell: str) -> str:
+    """The CPUs (with cores and precision where logged) of a cell's sittings, as sittings.log records them."""
+    log = HERE / "cells" / cell / "sittings.log"
+    lines = log.read_text().splitlines() if log.is_file() else []
+    found = [m[1] for m in (re.search(r"sitting starts \((.*), (?:from scratch|ckpt_path=\S*)\)$", x) for x in lines) if m]
+    short = [re.sub(r"\((R|TM)\)|Processor |CPU ", "", x) for x in found]
+    return "; ".join(dict.fromkeys(short)) or "–"
+
+
 def cell_row(cell: str) -> dict:
     rows = curve(cell)
     fid = column(rows, "val/fid")
@@ -92,7 +101,7 @@ def cell_row(cell: str) -> dict:
     )
     return {"cell": cell, "state": state, "steps": steps, "fid": fid,
             "best": min(fid, key=lambda x: x[1]) if fid else None, "wall": wall_minutes(cell),
-            "cpu": cpu[-1][1] if cpu else None, "test": json.loads(test.read_text()) if test.is_file() else None}  # fmt: skip
+            "cpu": cpu[-1][1] if cpu else None, "machine": machines(cell), "test": json.loads(test.read_text()) if test.is_file() else None}  # fmt: skip
 
 
 def converged(row: dict) -> str:
@@ -144,11 +153,11 @@ def main() -> None:
     for name, (title, cells) in TABLES.items():
         rows = [cell_row(c) for c in cells]
         out += [f"## {title}", "", "| cell | state | steps | best val FID (logged step) | wall min | CPU min (logged) | "
-                "test | converged |", "|---|---|---:|---:|---:|---:|---|---|"]  # fmt: skip
+                "machine | test | converged |", "|---|---|---:|---:|---:|---:|---|---|---|"]  # fmt: skip
         for r in rows:
             best = f"{r['best'][1]:.3f} ({r['best'][0]:,})" if r["best"] else "–"
             out.append(f"| {LABELS.get(r['cell'], r['cell'])} | {r['state']} | {r['steps']:,} | {best} | "
-                       f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {test_cell(r)} | {converged(r)} |")  # fmt: skip
+                       f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {r['machine']} | {test_cell(r)} | {converged(r)} |")  # fmt: skip
         picture = plot(name, title, rows)
         out += ["", f"![{title}]({picture})" if picture else "(no curve yet)", ""]
     (HERE / "status.md").write_text("\n".join(out))
