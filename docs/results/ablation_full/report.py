@@ -1,6 +1,6 @@
 """Issue 43's cells as they stand: one table and one plot of the in-training val FID per ablation table.
 
-    python docs/results/ablation_full/report.py        # writes status.md and curves_<table>.png beside this file
+    python docs/results/ablation_full/report.py     # writes ../ablation.md and curves_<table>.png beside this file
 
 Per cell: its state (not started / training / stopped), the steps reached, the best in-training val FID and the step
 it came at, the wall minutes of its sittings (sittings.log) and the CPU minutes training logged
@@ -28,6 +28,7 @@ from omegaconf import OmegaConf  # noqa: E402
 from motiondiff.eval.plateau import plateaued  # noqa: E402
 
 HERE = Path(__file__).parent
+OUT = HERE.parent / "ablation.md"
 RUNS = HERE.parents[2] / "outputs" / "ablation_full"
 REPS = ("hml263", "jp", "rp6jr", "rpqjr")
 TABLES = {  # the plan's tables: (title, cells as <condition>_<conf/ablation entry>)
@@ -41,7 +42,17 @@ TABLES = {  # the plan's tables: (title, cells as <condition>_<conf/ablation ent
     "vvmdm_none": ("vvMDM Tab. 1: prediction x representation (unconditioned)",
                    [f"none_{p}_{r}" for p in ("x0", "eps", "v") for r in REPS]),
 }  # fmt: skip
-LABELS = {"text_x0_hml263": "trans_enc (T = 1000)"}
+LABELS = {
+    "text_x0_hml263": "trans_enc (T = 1000)",
+    "text_trans_dec_x0_hml263": "trans_dec",
+    "text_trans_dec_token_x0_hml263": "trans_dec + token",
+    "text_gru_x0_hml263": "gru",
+    "text_unet_x0_hml263": "unet",
+    "text_x0_hml263_t10": "T = 10",
+    "text_x0_hml263_t100": "T = 100",
+}
+LABELS |= {f"{c}_{p}_{r}": f"{p.replace('eps', 'ε')} · {r}" for c in ("action", "none") for p in ("x0", "eps", "v")
+           for r in REPS}  # fmt: skip
 PRESET = OmegaConf.load(HERE.parents[2] / "conf" / "experiment" / "ablation_full.yaml")  # the plan's cap and rule
 CAP = PRESET.trainer.max_steps
 PLATEAU = {k: PRESET.callbacks.plateau[k] for k in ("min_gain", "window", "start", "mode")}
@@ -84,7 +95,9 @@ def machines(cell: str) -> str:
     """The CPUs (with cores and precision where logged) of a cell's sittings, as sittings.log records them."""
     log = HERE / "cells" / cell / "sittings.log"
     lines = log.read_text().splitlines() if log.is_file() else []
-    found = [m[1] for m in (re.search(r"sitting starts \((.*), (?:from scratch|ckpt_path=\S*)\)$", x) for x in lines) if m]
+    found = [
+        m[1] for m in (re.search(r"sitting starts \((.*), (?:from scratch|ckpt_path=\S*)\)$", x) for x in lines) if m
+    ]
     short = [re.sub(r"\((R|TM)\)|Processor |CPU ", "", x) for x in found]
     return "; ".join(dict.fromkeys(short)) or "–"
 
@@ -115,13 +128,12 @@ def converged(row: dict) -> str:
     return "✓" if s[key][0] >= share * real[key][0] else "did not converge in the cap"
 
 
-def test_cell(row: dict) -> str:
-    if row["test"] is None:
+def metric(row: dict, key: str, source: str = "summary") -> str:
+    """'mean ± 95 % CI' of one test metric (source 'real' for the real clips' row), '–' where absent."""
+    if row["test"] is None or key not in row["test"][source]:
         return "–"
-    s = row["test"]["summary"]
-    key = "r_precision_top3" if "r_precision_top3" in s else "accuracy"
-    extra = f"; {key.replace('_', ' ')} {s[key][0]:.3f} ± {s[key][1]:.3f}" if key in s else ""
-    return f"FID {s['fid'][0]:.3f} ± {s['fid'][1]:.3f}{extra}"
+    mean, ci = row["test"][source][key][:2]
+    return f"{mean:.3f} ± {ci:.3f}" if abs(mean) >= 0.01 else f"{mean:.1e} ± {ci:.0e}"
 
 
 def fmt(value, spec: str) -> str:
@@ -145,23 +157,77 @@ def plot(name: str, title: str, rows: list[dict]) -> str | None:
     return f"curves_{name}.png"
 
 
+def table(title: str, rows: list[dict], text: bool) -> list[str]:
+    """One ablation table: the real clips' row (from the first tested cell), then every cell."""
+    score, score_name = ("r_precision_top3", "R-prec top-3 ↑") if text else ("accuracy", "action acc. ↑")
+    out = [f"| cell | state | steps | best val FID (step) | wall min | CPU min | machine | FID ↓ | {score_name} | "
+           "smoothness → | converged |", "|---|---|---:|---:|---:|---:|---|---|---|---|---|"]  # fmt: skip
+    tested = [r for r in rows if r["test"]]
+    if tested:
+        real = tested[0]
+        out.append(f"| **real test clips** | | | | | | | {metric(real, 'fid', 'real')} | {metric(real, score, 'real')} | "
+                   f"{metric(real, 'smoothness', 'real')} | |")  # fmt: skip
+    for r in rows:
+        best = f"{r['best'][1]:.3f} ({r['best'][0]:,})" if r["best"] else "–"
+        out.append(f"| {LABELS.get(r['cell'], r['cell'])} | {r['state']} | {r['steps']:,} | {best} | "
+                   f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {r['machine']} | {metric(r, 'fid')} | "
+                   f"{metric(r, score)} | {metric(r, 'smoothness')} | {converged(r)} |")  # fmt: skip
+    return out
+
+
+def opening(all_rows: dict[str, list[dict]]) -> list[str]:
+    """What was trained, for how long, on what, and the verdict per table (verdicts.yaml, written by hand once a
+    table has its cells; 'pending' until then)."""
+    verdicts = OmegaConf.load(HERE / "verdicts.yaml") if (HERE / "verdicts.yaml").is_file() else {}
+    rows = list(
+        {r["cell"]: r for table_rows in all_rows.values() for r in table_rows}.values()
+    )  # T = 1000 is trans_enc
+    done = [r for r in rows if r["state"] == "done"]
+    hours = sum(r["wall"] or 0 for r in rows) / 60
+    machines = "; ".join(dict.fromkeys(m for r in rows if r["machine"] != "–" for m in r["machine"].split("; ")))
+    out = [f"**What was trained.** {len(done)} of {len(rows)} cells have stopped and been tested; "
+           f"{sum(r['steps'] for r in rows):,} training steps and {hours:.1f} h of sittings so far, on {machines or '–'}. "
+           "Every cell is the small model of `bandai_text_long` on the full Bandai set (real mocap; its text captions "
+           "are generated from the action and style labels), trained until its in-training val FID stopped improving "
+           f"by {PLATEAU['min_gain']:.0%} over {PLATEAU['window']:,} steps (from step {PLATEAU['start']:,}) or to the "
+           f"{CAP:,}-step cap; each is scored once on the test split with its best-val-FID checkpoint (20 "
+           "replications, mean ± 95 % CI, DDIM-50, guidance 2). Rules: [ablation_plan.md](ablation_plan.md).", "",
+           "| table | cells tested | steps per tested cell | verdict: does the paper's claim hold here? |",
+           "|---|---|---|---|"]  # fmt: skip
+    for name, (title, _) in TABLES.items():
+        table_rows = all_rows[name]
+        tested = [r for r in table_rows if r["state"] == "done"]
+        steps = ", ".join(f"{r['steps'] + 1:,}" for r in tested) or "–"
+        verdict = verdicts.get(name) or f"pending ({len(tested)} of {len(table_rows)} cells tested)"
+        out.append(f"| [{title}](#{anchor(title)}) | {len(tested)} / {len(table_rows)} | {steps} | {verdict} |")
+    return out + [""]
+
+
+def anchor(title: str) -> str:
+    """GitHub's heading anchor: lower case, punctuation dropped, spaces to hyphens."""
+    return re.sub(r"[^a-z0-9 _-]", "", title.lower()).replace(" ", "-")
+
+
 def main() -> None:
-    out = ["# Issue 43's cells: where they stand", "",
-           "Generated by `python docs/results/ablation_full/report.py`. Rules: [../ablation_plan.md](../ablation_plan.md); "
-           "how a cell runs: [README.md](README.md). In-training val FID: the callback's 64 fixed val clips, every "
-           "1,000 steps. Test: the best-val-FID checkpoint, 20 replications, run once when the cell has stopped.", ""]  # fmt: skip
-    for name, (title, cells) in TABLES.items():
-        rows = [cell_row(c) for c in cells]
-        out += [f"## {title}", "", "| cell | state | steps | best val FID (logged step) | wall min | CPU min (logged) | "
-                "machine | test | converged |", "|---|---|---:|---:|---:|---:|---|---|---|"]  # fmt: skip
-        for r in rows:
-            best = f"{r['best'][1]:.3f} ({r['best'][0]:,})" if r["best"] else "–"
-            out.append(f"| {LABELS.get(r['cell'], r['cell'])} | {r['state']} | {r['steps']:,} | {best} | "
-                       f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {r['machine']} | {test_cell(r)} | {converged(r)} |")  # fmt: skip
-        picture = plot(name, title, rows)
-        out += ["", f"![{title}]({picture})" if picture else "(no curve yet)", ""]
-    (HERE / "status.md").write_text("\n".join(out))
-    print(f"wrote {HERE / 'status.md'}")
+    all_rows = {name: [cell_row(c) for c in cells] for name, (_, cells) in TABLES.items()}
+    out = ["# Ablations at a plateau on the full Bandai set (issue 43)", "",
+           "Generated by `python docs/results/ablation_full/report.py` from the cells' run folders and the files "
+           "`cell.sh` keeps in [ablation_full/cells/](ablation_full/cells/); how a cell runs: "
+           "[ablation_full/README.md](ablation_full/README.md). The earlier, barely trained table on the 252 "
+           "embedded clips: [ablation_embedded.md](ablation_embedded.md).", ""]  # fmt: skip
+    out += opening(all_rows)
+    for name, (title, _) in TABLES.items():
+        out += [f"## {title}", ""] + table(title, all_rows[name], text=name.startswith("mdm"))
+        picture = plot(name, title, all_rows[name])
+        out += ["", f"![{title}](ablation_full/{picture})" if picture else "(no curve yet)", ""]
+    out += ["State: *in sittings* (training, resumed across sittings), *stopped, test to run*, *done* (tested). "
+            "Steps and best val FID are the logged ones (one short of the checkpoint's step). Wall minutes come from "
+            "each cell's sittings.log, CPU minutes from `compute/cpu_minutes` where the sittings logged it (the "
+            "process's CPU time over its threads). The curves are the in-training val FID on the evaluation "
+            "callback's 64 fixed val clips, every 1,000 steps. Smoothness: 1 is perfectly smooth; the real clips' "
+            "value is the target.", ""]  # fmt: skip
+    (OUT).write_text("\n".join(out))
+    print(f"wrote {OUT}")
 
 
 if __name__ == "__main__":
