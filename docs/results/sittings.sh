@@ -22,10 +22,11 @@ resume_arg() {
 
 # log_sitting LOG CKPT_ARG: a line with the time, the CPU and where the sitting starts from.
 log_sitting() {
-  local cpu precision  # the precision conf/trainer/cpu.yaml picks on this CPU
+  local cpu torch_side  # torch's threads (OMP_NUM_THREADS) and the precision conf/trainer/cpu.yaml picks on this CPU
   cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)
-  precision=$(python -c 'from motiondiff.runtime.hardware import fast_cpu_precision as p; print(p())')
-  echo "$(date -u +%FT%TZ) sitting starts ($cpu, $(nproc) cores, $precision, ${2:-from scratch})" >> "$1"
+  torch_side=$(python -c 'import torch; from motiondiff.runtime.hardware import fast_cpu_precision as p
+print(f"{torch.get_num_threads()} torch threads, {p()}")')
+  echo "$(date -u +%FT%TZ) sitting starts ($cpu, $(nproc --all) cores, $torch_side, ${2:-from scratch})" >> "$1"
 }
 
 # until_checkpoint CKPT LOG COMMAND...: run COMMAND in the background until CKPT exists and has stopped growing, then
