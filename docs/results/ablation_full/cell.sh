@@ -6,7 +6,9 @@
 # when its last checkpoint is at the cap or the stopping rule fired; then its best-val-FID checkpoint is evaluated
 # once on the test split (20 replications) into cells/<cond>_<cell>/test/. Stop a sitting with kill -9 <python pid>
 # (a background job ignores SIGINT): the checkpoint after the latest evaluation, at most 1,000 steps back, is where
-# the next sitting starts.
+# the next sitting starts. An ε cell is also tested with eps_fix's S3 sampling (MDM's DDIM steps and the static x̂0
+# clip), beside the default, for issue 43 point 2's account (docs/results/eps_fix/rules.md).
+# Edit this file only by writing a copy and moving it over (a running bash reads its script as it goes).
 set -u
 cd "$(dirname "$0")/../../.."; source .venv/bin/activate; source docs/results/sittings.sh; use_tcmalloc
 CELL=$1; COND=${2:-text}
@@ -57,5 +59,10 @@ if [ ! -f $CELLDIR/test/metrics.json ]; then
   best=$(ls $RUN/checkpoints/best-fid-*.ckpt | head -1)
   python evaluate.py checkpoint=$best dataset=bandai split=test replications=20 mm_replications=0 wandb=false \
     hydra.run.dir=$CELLDIR/test
+fi
+if [[ $CELL == eps_* ]] && [ ! -f $CELLDIR/test_leading_static/metrics.json ]; then  # point 2's account: S3 of eps_fix
+  best=$(ls $RUN/checkpoints/best-fid-*.ckpt | head -1)
+  python evaluate.py checkpoint=$best dataset=bandai split=test replications=20 mm_replications=0 wandb=false \
+    timestep_spacing=leading clip_x0=static hydra.run.dir=$CELLDIR/test_leading_static
 fi
 copy_curves

@@ -172,6 +172,11 @@ def table(title: str, rows: list[dict], text: bool) -> list[str]:
         out.append(f"| {LABELS.get(r['cell'], r['cell'])} | {r['state']} | {r['steps']:,} | {best} | "
                    f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {r['machine']} | {metric(r, 'fid')} | "
                    f"{metric(r, score)} | {metric(r, 'smoothness')} | {converged(r)} |")  # fmt: skip
+        account = HERE / "cells" / r["cell"] / "test_leading_static" / "metrics.json"
+        if account.is_file():  # an ε cell's second test: eps_fix's S3 sampling, for issue 43 point 2's account
+            s = {**r, "test": json.loads(account.read_text())}
+            out.append(f"| ↳ same checkpoint, MDM's DDIM steps + static x̂0 clip | | | | | | | {metric(s, 'fid')} | "
+                       f"{metric(s, score)} | {metric(s, 'smoothness')} | {converged(s)} |")  # fmt: skip
     return out
 
 
