@@ -21,6 +21,7 @@ from pathlib import Path
 import torch
 
 from motiondiff.bench import workloads as W
+from motiondiff.bench.timing import median_seconds
 from motiondiff.runtime.hardware import cpu_has_fast_bf16, cpu_model
 
 BATCH, FRAMES = 64, 120
@@ -28,14 +29,7 @@ SPLIT_MOTIONS = 277 * 2 * 20  # the test split, label and random captions, 20 re
 
 
 def _median_time(fn, repeats: int, warmup: int = 3) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+    return median_seconds(fn, repeats, warmup)["median_s"]
 
 
 def matmul_peak(dtype: torch.dtype) -> float:
