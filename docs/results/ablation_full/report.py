@@ -92,14 +92,27 @@ def wall_minutes(cell: str) -> float | None:
 
 
 def machines(cell: str) -> str:
-    """The CPUs (with cores and precision where logged) of a cell's sittings, as sittings.log records them."""
+    """The CPU of a cell's sittings with torch's threads and the precision of each, as sittings.log records them
+    (lines before 2026-12-06 21:15 UTC name the CPU only: those sittings ran torch's default of one thread per core,
+    in fp32, on CPUs without native bf16)."""
     log = HERE / "cells" / cell / "sittings.log"
     lines = log.read_text().splitlines() if log.is_file() else []
-    found = [
-        m[1] for m in (re.search(r"sitting starts \((.*), (?:from scratch|ckpt_path=\S*)\)$", x) for x in lines) if m
-    ]
-    short = [re.sub(r"\((R|TM)\)|Processor |CPU ", "", x) for x in found]
-    return "; ".join(dict.fromkeys(short)) or "–"
+    pattern = r"sitting starts \((.*?)(?:, (\d+) cores, (\d+) torch threads, (\S+))?, (?:from scratch|ckpt_path=\S*)\)$"
+    cpus: dict[str, dict[str, list]] = {}
+    for m in filter(None, (re.search(pattern, line) for line in lines)):
+        cpu = re.sub(r"\((R|TM)\)|Processor |CPU ", "", m[1])
+        seen = cpus.setdefault(cpu, {"threads": [], "precision": []})
+        threads, precision = (m[3], m[4].replace("32-true", "fp32")) if m[2] else (None, "fp32")
+        for key, value in (("threads", threads), ("precision", precision)):
+            if value not in seen[key]:
+                seen[key].append(value)
+    return (
+        "; ".join(
+            f"{cpu}, {'/'.join(v['precision'])}, torch threads: {', then '.join(x or 'one per core' for x in v['threads'])}"
+            for cpu, v in cpus.items()
+        )
+        or "–"
+    )
 
 
 def cell_row(cell: str) -> dict:
@@ -189,7 +202,11 @@ def opening(all_rows: dict[str, list[dict]]) -> list[str]:
     )  # T = 1000 is trans_enc
     done = [r for r in rows if r["state"] == "done"]
     hours = sum(r["wall"] or 0 for r in rows) / 60
-    machines = "; ".join(dict.fromkeys(m for r in rows if r["machine"] != "–" for m in r["machine"].split("; ")))
+    machines = "; ".join(
+        dict.fromkeys(
+            m for r in rows if r["machine"] != "–" for m in r["machine"].split("; ") for m in [m.split(",")[0]]
+        )
+    )
     out = [f"**What was trained.** {len(done)} of {len(rows)} cells have stopped and been tested; "
            f"{sum(r['steps'] for r in rows):,} training steps and {hours:.1f} h of sittings so far, on {machines or '–'}. "
            "Every cell is the small model of `bandai_text_long` on the full Bandai set (real mocap; its text captions "
