@@ -197,16 +197,12 @@ def opening(all_rows: dict[str, list[dict]]) -> list[str]:
     """What was trained, for how long, on what, and the verdict per table (verdicts.yaml, written by hand once a
     table has its cells; 'pending' until then)."""
     verdicts = OmegaConf.load(HERE / "verdicts.yaml") if (HERE / "verdicts.yaml").is_file() else {}
-    rows = list(
-        {r["cell"]: r for table_rows in all_rows.values() for r in table_rows}.values()
-    )  # T = 1000 is trans_enc
+    by_cell = {r["cell"]: r for table_rows in all_rows.values() for r in table_rows}  # T = 1000 is trans_enc
+    rows = list(by_cell.values())
     done = [r for r in rows if r["state"] == "done"]
     hours = sum(r["wall"] or 0 for r in rows) / 60
-    machines = "; ".join(
-        dict.fromkeys(
-            m for r in rows if r["machine"] != "–" for m in r["machine"].split("; ") for m in [m.split(",")[0]]
-        )
-    )
+    sittings = [m for r in rows if r["machine"] != "–" for m in r["machine"].split("; ")]
+    machines = "; ".join(dict.fromkeys(m.split(",")[0] for m in sittings))  # the CPUs only
     out = [f"**What was trained.** {len(done)} of {len(rows)} cells have stopped and been tested; "
            f"{sum(r['steps'] for r in rows):,} training steps and {hours:.1f} h of sittings so far, on {machines or '–'}. "
            "Every cell is the small model of `bandai_text_long` on the full Bandai set (real mocap; its text captions "
