@@ -42,6 +42,7 @@ TABLES = {  # the plan's tables: (title, cells as <condition>_<conf/ablation ent
     "vvmdm_none": ("vvMDM Tab. 1: prediction x representation (unconditioned)",
                    [f"none_{p}_{r}" for p in ("x0", "eps", "v") for r in REPS]),
 }  # fmt: skip
+CONDITIONS = {"mdm_backbones": "text", "mdm_steps": "text", "vvmdm_action": "action", "vvmdm_none": "none"}
 LABELS = {
     "text_x0_hml263": "trans_enc (T = 1000)",
     "text_trans_dec_x0_hml263": "trans_dec",
@@ -170,26 +171,37 @@ def plot(name: str, title: str, rows: list[dict]) -> str | None:
     return f"curves_{name}.png"
 
 
-def table(title: str, rows: list[dict], text: bool) -> list[str]:
+SCORES = {  # the test metrics beside FID and smoothness, per condition: the papers' own columns
+    "text": [("r_precision_top3", "R-prec top-3 ↑")],
+    "action": [("accuracy", "action acc. ↑")],
+    "none": [("kid", "KID ↓"), ("precision", "precision ↑"), ("recall", "recall ↑")],
+}
+
+
+def table(rows: list[dict], condition: str) -> list[str]:
     """One ablation table: the real clips' row (from the first tested cell), then every cell."""
-    score, score_name = ("r_precision_top3", "R-prec top-3 ↑") if text else ("accuracy", "action acc. ↑")
-    out = [f"| cell | state | steps | best val FID (step) | wall min | CPU min | machine | FID ↓ | {score_name} | "
-           "smoothness → | converged |", "|---|---|---:|---:|---:|---:|---|---|---|---|---|"]  # fmt: skip
+    scores = SCORES[condition]
+    names = " | ".join(name for _, name in scores)
+    out = [f"| cell | state | steps | best val FID (step) | wall min | CPU min | machine | FID ↓ | {names} | smoothness → "
+           "| converged |", "|---|---|---:|---:|---:|---:|---|" + "---|" * (len(scores) + 3)]  # fmt: skip
+
+    def measured(r: dict, source: str = "summary") -> str:
+        keys = ["fid", *(key for key, _ in scores), "smoothness"]
+        return " | ".join(metric(r, key, source) for key in keys)
+
     tested = [r for r in rows if r["test"]]
     if tested:
-        real = tested[0]
-        out.append(f"| **real test clips** | | | | | | | {metric(real, 'fid', 'real')} | {metric(real, score, 'real')} | "
-                   f"{metric(real, 'smoothness', 'real')} | |")  # fmt: skip
+        out.append(f"| **real test clips** | | | | | | | {measured(tested[0], 'real')} | |")
     for r in rows:
         best = f"{r['best'][1]:.3f} ({r['best'][0]:,})" if r["best"] else "–"
         out.append(f"| {LABELS.get(r['cell'], r['cell'])} | {r['state']} | {r['steps']:,} | {best} | "
-                   f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {r['machine']} | {metric(r, 'fid')} | "
-                   f"{metric(r, score)} | {metric(r, 'smoothness')} | {converged(r)} |")  # fmt: skip
+                   f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {r['machine']} | {measured(r)} | "
+                   f"{converged(r)} |")  # fmt: skip
         account = HERE / "cells" / r["cell"] / "test_leading_static" / "metrics.json"
         if account.is_file():  # an ε cell's second test: eps_fix's S3 sampling, for issue 43 point 2's account
             s = {**r, "test": json.loads(account.read_text())}
-            out.append(f"| ↳ same checkpoint, MDM's DDIM steps + static x̂0 clip | | | | | | | {metric(s, 'fid')} | "
-                       f"{metric(s, score)} | {metric(s, 'smoothness')} | {converged(s)} |")  # fmt: skip
+            out.append(f"| ↳ same checkpoint, MDM's DDIM steps + static x̂0 clip | | | | | | | {measured(s)} | "
+                       f"{converged(s)} |")  # fmt: skip
     return out
 
 
@@ -235,7 +247,7 @@ def main() -> None:
            "embedded clips: [ablation_embedded.md](ablation_embedded.md).", ""]  # fmt: skip
     out += opening(all_rows)
     for name, (title, _) in TABLES.items():
-        out += [f"## {title}", ""] + table(title, all_rows[name], text=name.startswith("mdm"))
+        out += [f"## {title}", ""] + table(all_rows[name], CONDITIONS[name])
         picture = plot(name, title, all_rows[name])
         out += ["", f"![{title}](ablation_full/{picture})" if picture else "(no curve yet)", ""]
     out += ["State: *in sittings* (training, resumed across sittings), *stopped, test to run*, *done* (tested). "
