@@ -56,14 +56,14 @@ if ! finished; then
 fi
 finished || exit 0
 if [ ! -f $CELLDIR/test/metrics.json ]; then
-  best=$(ls $RUN/checkpoints/best-fid-*.ckpt | head -1)
+  best=$(python $HERE/best_checkpoint.py $NAME) || exit 1  # the lowest logged val FID's (a resumed run can keep stale ones)
   # action_accuracy=false: a text cell's label-caption pass (issue 39's extra metric, not an ablation column) would
   # double the generation; it runs after each replication's own motions, so the reported numbers are the same
   python evaluate.py checkpoint=$best dataset=bandai split=test replications=20 mm_replications=0 wandb=false \
     action_accuracy=false hydra.run.dir=$CELLDIR/test
 fi
 if [[ $CELL == eps_* ]] && [ ! -f $CELLDIR/test_leading_static/metrics.json ]; then  # point 2's account: S3 of eps_fix
-  best=$(ls $RUN/checkpoints/best-fid-*.ckpt | head -1)
+  best=$(python $HERE/best_checkpoint.py $NAME) || exit 1
   python evaluate.py checkpoint=$best dataset=bandai split=test replications=20 mm_replications=0 wandb=false \
     action_accuracy=false timestep_spacing=leading clip_x0=static hydra.run.dir=$CELLDIR/test_leading_static
 fi
