@@ -42,7 +42,6 @@ TABLES = {  # the plan's tables: (title, cells as <condition>_<conf/ablation ent
     "vvmdm_none": ("vvMDM Tab. 1: prediction x representation (unconditioned)",
                    [f"none_{p}_{r}" for p in ("x0", "eps", "v") for r in REPS]),
 }  # fmt: skip
-CONDITIONS = {"mdm_backbones": "text", "mdm_steps": "text", "vvmdm_action": "action", "vvmdm_none": "none"}
 LABELS = {
     "text_x0_hml263": "trans_enc (T = 1000)",
     "text_trans_dec_x0_hml263": "trans_dec",
@@ -92,7 +91,7 @@ def wall_minutes(cell: str) -> float | None:
     return sum(spans) if spans else None
 
 
-def machines(cell: str) -> str:
+def machines(cell: str) -> dict[str, dict[str, list]]:
     """The CPU of a cell's sittings with torch's threads and the precision of each, as sittings.log records them
     (lines before 2026-12-06 21:15 UTC name the CPU only: those sittings ran torch's default of one thread per core,
     in fp32, on CPUs without native bf16)."""
@@ -107,13 +106,14 @@ def machines(cell: str) -> str:
         for key, value in (("threads", threads), ("precision", precision)):
             if value not in seen[key]:
                 seen[key].append(value)
-    return (
-        "; ".join(
-            f"{cpu}, {'/'.join(v['precision'])}, torch threads: {', then '.join(x or 'one per core' for x in v['threads'])}"
-            for cpu, v in cpus.items()
-        )
-        or "–"
-    )
+    return cpus
+
+
+def machine_text(cpus: dict[str, dict[str, list]]) -> str:
+    """'<CPU>, <precision>, torch threads: <n>[, then <m>]' per CPU of `machines`, '–' for none."""
+    texts = [f"{cpu}, {'/'.join(v['precision'])}, torch threads: {', then '.join(x or 'one per core' for x in v['threads'])}"
+             for cpu, v in cpus.items()]  # fmt: skip
+    return "; ".join(texts) or "–"
 
 
 def cell_row(cell: str) -> dict:
@@ -128,17 +128,27 @@ def cell_row(cell: str) -> dict:
     )
     return {"cell": cell, "state": state, "steps": steps, "fid": fid,
             "best": min(fid, key=lambda x: x[1]) if fid else None, "wall": wall_minutes(cell),
-            "cpu": cpu[-1][1] if cpu else None, "machine": machines(cell), "test": json.loads(test.read_text()) if test.is_file() else None}  # fmt: skip
+            "cpu": cpu[-1][1] if cpu else None, "machines": machines(cell), "test": json.loads(test.read_text()) if test.is_file() else None}  # fmt: skip
+
+
+CONVERGED = {"text": ("r_precision_top3", 0.7), "action": ("accuracy", 0.8)}  # the plan's share of the real clips'
+
+
+def condition(cell: str) -> str:
+    """text, action or none: a cell's name starts with its condition."""
+    return cell.split("_")[0]
 
 
 def converged(row: dict) -> str:
     """The plan's mark from the test evaluation: ✓, 'did not converge in the cap', or '' (not stopped / no rule)."""
     if row["test"] is None:
         return ""
-    s, real = row["test"]["summary"], row["test"]["real"]
-    key, share = ("r_precision_top3", 0.7) if "r_precision_top3" in s else ("accuracy", 0.8)
-    if key not in s or row["cell"].startswith("none_"):
+    if condition(row["cell"]) not in CONVERGED:
         return "n/a (unconditioned)"
+    key, share = CONVERGED[condition(row["cell"])]
+    s, real = row["test"]["summary"], row["test"]["real"]
+    if key not in s:
+        return "–"
     return "✓" if s[key][0] >= share * real[key][0] else "did not converge in the cap"
 
 
@@ -178,9 +188,10 @@ SCORES = {  # the test metrics beside FID and smoothness, per condition: the pap
 }
 
 
-def table(rows: list[dict], condition: str) -> list[str]:
-    """One ablation table: the real clips' row (from the first tested cell), then every cell."""
-    scores = SCORES[condition]
+def table(rows: list[dict]) -> list[str]:
+    """One ablation table (its cells share a condition): the real clips' row (from the first tested cell), then every
+    cell."""
+    scores = SCORES[condition(rows[0]["cell"])]
     names = " | ".join(name for _, name in scores)
     out = [f"| cell | state | steps | best val FID (step) | wall min | CPU min | machine | FID ↓ | {names} | smoothness → "
            "| converged |", "|---|---|---:|---:|---:|---:|---|" + "---|" * (len(scores) + 3)]  # fmt: skip
@@ -195,7 +206,7 @@ def table(rows: list[dict], condition: str) -> list[str]:
     for r in rows:
         best = f"{r['best'][1]:.3f} ({r['best'][0]:,})" if r["best"] else "–"
         out.append(f"| {LABELS.get(r['cell'], r['cell'])} | {r['state']} | {r['steps']:,} | {best} | "
-                   f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {r['machine']} | {measured(r)} | "
+                   f"{fmt(r['wall'], '.0f')} | {fmt(r['cpu'], '.0f')} | {machine_text(r['machines'])} | {measured(r)} | "
                    f"{converged(r)} |")  # fmt: skip
         account = HERE / "cells" / r["cell"] / "test_leading_static" / "metrics.json"
         if account.is_file():  # an ε cell's second test: eps_fix's S3 sampling, for issue 43 point 2's account
@@ -213,10 +224,9 @@ def opening(all_rows: dict[str, list[dict]]) -> list[str]:
     rows = list(by_cell.values())
     done = [r for r in rows if r["state"] == "done"]
     hours = sum(r["wall"] or 0 for r in rows) / 60
-    sittings = [m for r in rows if r["machine"] != "–" for m in r["machine"].split("; ")]
-    machines = "; ".join(dict.fromkeys(m.split(",")[0] for m in sittings))  # the CPUs only
+    cpus = "; ".join(dict.fromkeys(cpu for r in rows for cpu in r["machines"]))
     out = [f"**What was trained.** {len(done)} of {len(rows)} cells have stopped and been tested; "
-           f"{sum(r['steps'] for r in rows):,} training steps and {hours:.1f} h of sittings so far, on {machines or '–'}. "
+           f"{sum(r['steps'] for r in rows):,} training steps and {hours:.1f} h of sittings so far, on {cpus or '–'}. "
            "Every cell is the small model of `bandai_text_long` on the full Bandai set (real mocap; its text captions "
            "are generated from the action and style labels), trained until its in-training val FID stopped improving "
            f"by {PLATEAU['min_gain']:.0%} over {PLATEAU['window']:,} steps (from step {PLATEAU['start']:,}) or to the "
@@ -247,7 +257,7 @@ def main() -> None:
            "embedded clips: [ablation_embedded.md](ablation_embedded.md).", ""]  # fmt: skip
     out += opening(all_rows)
     for name, (title, _) in TABLES.items():
-        out += [f"## {title}", ""] + table(all_rows[name], CONDITIONS[name])
+        out += [f"## {title}", ""] + table(all_rows[name])
         picture = plot(name, title, all_rows[name])
         out += ["", f"![{title}](ablation_full/{picture})" if picture else "(no curve yet)", ""]
     out += ["State: *in sittings* (training, resumed across sittings), *stopped, test to run*, *done* (tested). "
