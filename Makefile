@@ -89,10 +89,11 @@ GC_OUT ?= docs/results/guidedmotion/comparison_mirror
 COMP := dataset=bandai_mini_compositional dataset.datamodule.mirror=true
 guided-compare: setup allocator
 	GC=$(GC) docs/results/guidedmotion/mirror_release/run.sh
-	test -f $(GC)/mdm/checkpoints/last.ckpt || $(WITH_TCMALLOC) $(PY) train.py $(COMP) trainer.max_steps=-1 \
-		"+trainer.max_time={seconds: $$($(PY) -c 'import json,sys; print(int(sum(json.load(open(f"$(GC)/{s}/run.json"))["train_seconds"] for s in sys.argv[1:])))' vae_motion vae_action vae_specific latent)}" \
-		hydra.run.dir=$(GC)/mdm
-	mdm=$$(ls $(GC)/mdm/checkpoints/best-fid-*.ckpt 2>/dev/null | head -1); \
+	$(PY) -c "import json,sys; sys.exit(0 if 'train_steps' in json.load(open('$(GC)/mdm/run.json')) else 1)" 2>/dev/null || \
+	$(WITH_TCMALLOC) $(PY) train.py $(COMP) trainer.max_steps=-1 hydra.run.dir=$(GC)/mdm \
+		"+trainer.max_time={seconds: $$($(PY) -c 'import json,sys; print(int(sum((lambda r: r.get("wall_seconds_all_sittings", r["train_seconds"]))(json.load(open(f"$(GC)/{s}/run.json"))) for s in sys.argv[1:])))' vae_motion vae_action vae_specific latent)}" \
+		$$(test -f $(GC)/mdm/checkpoints/last.ckpt && echo ckpt_path=$(GC)/mdm/checkpoints/last.ckpt)
+	mdm=$$($(PY) -c 'import glob,sys; from motiondiff.runtime.best_checkpoints import best_of; print(best_of(sorted(glob.glob(sys.argv[1])), "val/fid") or "")' "$(GC)/mdm/checkpoints/best-fid-*.ckpt"); \
 	$(PY) -m motiondiff.studies.guided_compare latent=$(GC)/latent/checkpoints/last.ckpt \
 		mdm=$${mdm:-$(GC)/mdm/checkpoints/last.ckpt} replications=$(GC_REPLICATIONS) out=$(GC_OUT)
 

@@ -23,6 +23,7 @@ from motiondiff.cli.common import (
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
+from motiondiff.lit.compute_time import run_totals
 from motiondiff.lit.diffusion import MotionDiffusionModule
 from motiondiff.lit.resume import KEY
 from motiondiff.model_files.release_checks import release_paths
@@ -207,7 +208,7 @@ def run(cfg: DictConfig) -> Path:
         return last
     meta = {"train_steps": trainer.global_step, "train_seconds": round(seconds, 1),
             "overrides": list(HydraConfig.get().overrides.task)}  # fmt: skip
-    update_run_json(out, **meta)
+    update_run_json(out, **meta, **run_totals(callbacks))
     print(f"\ntrained {trainer.global_step} steps; checkpoint: {last}")
     if cfg.final_evaluation is not None:
         final_evaluation(cfg, module, dm, out, trainer.global_step)

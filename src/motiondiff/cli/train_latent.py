@@ -17,6 +17,7 @@ from motiondiff.cli.common import UsageError, check_ckpt_path, text_encoder_kwar
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
+from motiondiff.lit.compute_time import run_totals
 from motiondiff.lit.latent import HierarchicalLatentModule
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.model_files.loading import load_vae
@@ -103,7 +104,7 @@ def run(cfg: DictConfig) -> Path:
     seconds = time.perf_counter() - start
     meta = {"train_steps": trainer.global_step, "train_seconds": round(seconds, 1), "parameters": n_params,
             "vaes": {k: str(v) for k, v in cfg.vae.items()}, "overrides": list(HydraConfig.get().overrides.task)}  # fmt: skip
-    update_run_json(out, **meta)
+    update_run_json(out, **meta, **run_totals(callbacks))
     last = out / "checkpoints" / "last.ckpt"
     print(f"\ntrained {trainer.global_step} steps in {seconds:.0f} s; checkpoint: {last}")
     return last

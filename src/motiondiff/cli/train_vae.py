@@ -20,6 +20,7 @@ from motiondiff.cli.common import UsageError, check_ckpt_path, to_dict, trainer_
 from motiondiff.cli.validate import RULES_TRAIN, check
 from motiondiff.data.datamodules import MotionDataModule
 from motiondiff.lit.checkpoint_io import AtomicCheckpointIO
+from motiondiff.lit.compute_time import run_totals
 from motiondiff.lit.vae import MotionVAEModule
 from motiondiff.models.vae import LEVEL_TOKENS
 from motiondiff.runtime.provenance import provenance, update_run_json
@@ -90,7 +91,7 @@ def run(cfg: DictConfig) -> Path:
         "best_val_mpjpe_m": float(best.best_model_score) if best and best.best_model_score is not None else None,
         "overrides": list(HydraConfig.get().overrides.task),
     }
-    update_run_json(out, **meta)
+    update_run_json(out, **meta, **run_totals(callbacks))
     last = out / "checkpoints" / "last.ckpt"
     print(f"\ntrained {trainer.global_step} steps in {seconds:.0f} s; checkpoint: {last}")
     if meta["best_checkpoint"]:

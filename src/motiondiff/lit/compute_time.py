@@ -43,3 +43,13 @@ class ComputeTime(Callback):
 
     def load_state_dict(self, state_dict: dict) -> None:
         self.cpu_s_before, self.wall_s_before = float(state_dict["cpu_s"]), float(state_dict["wall_s"])
+
+
+def run_totals(callbacks: list) -> dict:
+    """run.json's all-sittings compute, from the run's `ComputeTime` callback ({} without one): a stage resumed across
+    sittings is timed whole, where the CLI's own ``train_seconds`` is the last sitting's fit."""
+    timer = next((c for c in callbacks if isinstance(c, ComputeTime)), None)
+    if timer is None:
+        return {}
+    cpu, wall = timer.totals()
+    return {"wall_seconds_all_sittings": round(wall, 1), "cpu_seconds_all_sittings": round(cpu, 1)}

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from motiondiff.runtime.best_checkpoints import best_of
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.file_kinds import file_problem
 from motiondiff.runtime.paths import REPO_DIR, work_dir
@@ -79,10 +80,10 @@ def _from_runs(which: str, output_dir: Path) -> Path:
         )
     if which == "latest":
         return runs[-1]
-    best = sorted(runs[-1].parent.glob("best-fid-*.ckpt"))
-    if not best:
+    best = best_of(sorted(runs[-1].parent.glob("best-fid-*.ckpt")), "val/fid")  # by stored FID, not by name
+    if best is None:
         raise UsageError(
             f"the newest run {runs[-1].parent.parent} has no best-FID checkpoint (it trained without evaluators or "
             "never evaluated); use checkpoint=latest"
         )
-    return best[-1]
+    return best

@@ -8,7 +8,7 @@ import lightning as L
 from lightning.pytorch.demos.boring_classes import BoringModel
 from lightning.pytorch.loggers import CSVLogger
 
-from motiondiff.lit.compute_time import ComputeTime
+from motiondiff.lit.compute_time import ComputeTime, run_totals
 
 
 def fit(tmp_path, steps, ckpt_path=None, version=0):
@@ -30,3 +30,12 @@ def test_compute_is_logged_and_a_resumed_run_counts_on_from_its_checkpoint(tmp_p
     second, walls = fit(tmp_path, 12, ckpt_path=tmp_path / "step6.ckpt", version=1)
     assert second.cpu_s_before > 0 and second.wall_s_before > 0, "the checkpoint's totals were not restored"
     assert all(w * 60 >= second.wall_s_before for w in walls), "the resumed sitting started counting from zero"
+
+
+def test_run_json_totals_take_in_the_earlier_sittings(tmp_path):
+    fit(tmp_path, 6)
+    second, _ = fit(tmp_path, 12, ckpt_path=tmp_path / "step6.ckpt", version=1)
+    totals = run_totals([object(), second])
+    assert second.wall_s_before > 0 and totals["wall_seconds_all_sittings"] >= round(second.wall_s_before, 1)
+    assert second.cpu_s_before > 0 and totals["cpu_seconds_all_sittings"] >= round(second.cpu_s_before, 1)
+    assert run_totals([object()]) == {}, "a run without the callback claims compute it did not measure"
