@@ -13,6 +13,8 @@ import torch
 from cli_helpers import run_cli
 from fixtures.in_process import run_entry
 
+from motiondiff.runtime.hardware import cpu_model
+
 DATA = ["dataset=bandai_mini_compositional", "logger=csv", "trainer.log_every_n_steps=1", "batch_size=128"]
 TINY_VAE = ["vae.d_model=32", "vae.num_layers=1", "vae.num_heads=2", "vae.ff_size=64", "vae.latent_dim=16",
             "trainer.check_val_every_n_epoch=1", "trainer.max_steps=2", "checkpoint_every=2"]  # fmt: skip
@@ -98,7 +100,9 @@ def test_comparison_with_mdm_and_the_level_ablation_writes_every_row(latent_ckpt
     assert rows["motion level"][0]["fid"] != rows["all three levels"][0]["fid"]
     assert result["clips"] == 64 and result["times"]["local_actions"] >= 3
     assert all(result["times"][k] > 0 for k in ("guidedmotion_latent_s", "guidedmotion_local_actions_s", "mdm_s"))
-    assert result["training"]["GuidedMotion latent stage"] != "unknown"
+    latent_stage = result["training"]["GuidedMotion latent stage"]
+    assert latent_stage["steps"] > 0 and latent_stage["seconds"] > 0 and latent_stage["precision"] != "unknown"
+    assert latent_stage["machine"].startswith(cpu_model())
     text = out.with_suffix(".md").read_text()
     assert "Ablation (paper Tab. 4 style)" in text and "Sampling time per motion" in text
 

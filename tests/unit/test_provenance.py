@@ -36,3 +36,13 @@ def test_the_config_is_stored_resolved_and_run_json_merges(tmp_path):
     saved = json.loads((tmp_path / "run.json").read_text())
     assert saved["train_steps"] == 10 and saved["provenance"]["config"]["batch_size"] == 64
     assert saved["provenance"]["packages"]["torch"].startswith("2.13.0")
+
+
+def test_the_machine_is_recorded_with_the_instruction_sets_that_decide_its_speed():
+    import torch
+
+    from motiondiff.runtime.hardware import cpu_flags, cpu_model
+
+    record = provenance()["machine"]
+    assert record["cpu"] == cpu_model() and record["cores"] >= 1 and record["torch_threads"] == torch.get_num_threads()
+    assert record["flags"] == [name for name, present in cpu_flags().items() if present]

@@ -1,10 +1,12 @@
 """What produced a run: its fully resolved config, the code's git commit (and whether the tree had uncommitted
-changes), the versions of the packages that shape results, the Python and the machine. Training writes it into
-`run.json` before the first step, so even a killed run says what it was."""
+changes), the versions of the packages that shape results, the Python and the machine (CPU, cores, the instruction
+sets that decide its speed, torch's threads). Training writes it into `run.json` before the first step, so even a
+killed run says what it was."""
 
 from __future__ import annotations
 
 import json
+import os
 import platform
 import subprocess
 import sys
@@ -45,9 +47,20 @@ def package_versions(names: tuple[str, ...] = PACKAGES) -> dict[str, str | None]
     return versions
 
 
+def machine() -> dict:
+    """The CPU that ran it: model name, cores, the instruction sets that decide matmul speed, torch's threads (one
+    model name covers CPUs with and without native bf16, so the name alone does not say which ran)."""
+    import torch
+
+    from motiondiff.runtime.hardware import cpu_flags, cpu_model
+
+    return {"cpu": cpu_model(), "cores": os.cpu_count(), "flags": [k for k, v in cpu_flags().items() if v],
+            "torch_threads": torch.get_num_threads()}  # fmt: skip
+
+
 def provenance(cfg: DictConfig | None = None) -> dict:
     record = {"git": git_state(), "packages": package_versions(), "python": platform.python_version(),
-              "platform": platform.platform(), "argv": sys.argv}  # fmt: skip
+              "platform": platform.platform(), "machine": machine(), "argv": sys.argv}  # fmt: skip
     if cfg is not None:
         record["config"] = OmegaConf.to_container(cfg, resolve=True)
     return record
