@@ -240,7 +240,9 @@ def opening(all_rows: dict[str, list[dict]]) -> list[str]:
         steps = ", ".join(f"{r['steps'] + 1:,}" for r in tested) or "–"
         verdict = verdicts.get(name) or f"pending ({len(tested)} of {len(table_rows)} cells tested)"
         out.append(f"| [{title}](#{anchor(title)}) | {len(tested)} / {len(table_rows)} | {steps} | {verdict} |")
-    return out + [""]
+    return out + ["", "GuidedMotion against MDM and its Tab. 4 ablation (issue 43 point 3) are measured by `make "
+                  "guided-compare`: [guidedmotion/comparison_mirror.md](guidedmotion/comparison_mirror.md), its "
+                  "verdict in [../guidedmotion.md](../guidedmotion.md).", ""]  # fmt: skip
 
 
 def anchor(title: str) -> str:
