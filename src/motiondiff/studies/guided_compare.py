@@ -133,7 +133,7 @@ def sampling_times(pipe, mdm, table, caption: str, frames: int, args: dict) -> d
     return times
 
 
-def training_seconds(checkpoint: Path) -> dict | None:
+def run_record(checkpoint: Path) -> dict | None:
     """run.json of the training run that wrote ``checkpoint`` (<run>/checkpoints/<file>), if there is one."""
     meta = checkpoint.resolve().parent.parent / "run.json"
     return json.loads(meta.read_text()) if meta.is_file() else None
@@ -154,7 +154,7 @@ def training_record(run: dict | None) -> dict:
 
 
 def machine_text(machine: dict) -> str:
-    flags = "/".join(machine["flags"]) or "no AVX2"
+    flags = "/".join(machine["flags"]) or "no AVX2/AVX-512 flag read"
     return f"{machine['cpu']}, {machine['cores']} cores, {machine['torch_threads']} torch threads, {flags}"
 
 
@@ -269,8 +269,8 @@ def main(argv: list[str] | None = None) -> int:
         tqdm.write(f"replication {r + 1}/{settings['replications']} in {time.perf_counter() - start:.0f} s")
     frames = int(clips.lengths.max())
     times = {"frames": frames, **sampling_times(pipe, mdm, table, clips.captions[0][0], frames, settings)}
-    latent_run, mdm_run = training_seconds(latent_path), training_seconds(mdm_path)
-    training = {f"GuidedMotion {level} VAE": training_record(training_seconds(Path(path)))
+    latent_run, mdm_run = run_record(latent_path), run_record(mdm_path)
+    training = {f"GuidedMotion {level} VAE": training_record(run_record(Path(path)))
                 for level, path in ((latent_run or {}).get("vaes") or {}).items()}  # fmt: skip
     training["GuidedMotion latent stage"] = training_record(latent_run)
     training["MDM"] = training_record(mdm_run)
