@@ -48,10 +48,11 @@ def test_fast_dropout_repeats_under_the_same_seed():
     assert torch.equal(FastDropout(0.3).eval()(x), x)
 
 
-def _pair(dropout: float):
+def _pair(dropout: float, norm_first: bool = False):
     torch.manual_seed(0)
-    ref = nn.TransformerEncoderLayer(32, 4, 64, dropout, activation="gelu", batch_first=True)
-    fast = FastDropoutEncoderLayer(32, 4, 64, dropout, activation="gelu", batch_first=True)
+    args = dict(activation="gelu", batch_first=True, norm_first=norm_first)
+    ref = nn.TransformerEncoderLayer(32, 4, 64, dropout, **args)
+    fast = FastDropoutEncoderLayer(32, 4, 64, dropout, **args)
     fast.load_state_dict(ref.state_dict())  # the same parameters, the same names
     return ref, fast
 
@@ -64,14 +65,22 @@ def _inputs():
     return x, pad
 
 
+@pytest.mark.parametrize("norm_first", [False, True])
 @pytest.mark.parametrize("padded", [False, True])
-def test_inference_is_pytorchs_layer(padded):
-    ref, fast = _pair(0.1)
+def test_inference_is_pytorchs_layer(padded, norm_first):
+    """CPU inference attends through scaled_dot_product_attention instead of PyTorch's fused layer: the same output
+    to float rounding, for a layer alone (bool padding mask) and in nn.TransformerEncoder (which passes an additive
+    float one), post- and pre-norm."""
+    ref, fast = _pair(0.1, norm_first)
     x, pad = _inputs()
+    mask = pad if padded else None
     with torch.inference_mode():
-        a = ref.eval()(x, src_key_padding_mask=pad if padded else None)
-        b = fast.eval()(x, src_key_padding_mask=pad if padded else None)
-    torch.testing.assert_close(b, a, atol=1e-6, rtol=0)
+        torch.testing.assert_close(fast.eval()(x, src_key_padding_mask=mask), ref.eval()(x, src_key_padding_mask=mask),
+                                   atol=1e-6, rtol=0)  # fmt: skip
+        a, b = (nn.TransformerEncoder(layer, num_layers=2, enable_nested_tensor=False).eval() for layer in (ref, fast))
+        valid = ~pad[..., None] if padded else torch.ones(*x.shape[:2], 1, dtype=torch.bool)
+        ya, yb = a(x, src_key_padding_mask=mask), b(x, src_key_padding_mask=mask)
+        torch.testing.assert_close(yb[valid.expand_as(yb)], ya[valid.expand_as(ya)], atol=1e-5, rtol=0)
 
 
 @pytest.mark.parametrize("padded", [False, True])

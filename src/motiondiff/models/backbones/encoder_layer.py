@@ -1,11 +1,15 @@
-"""``nn.TransformerEncoderLayer`` whose training pass drops out with ``FastDropout``, attention weights included.
+"""``nn.TransformerEncoderLayer`` with faster CPU passes: training drops out with ``FastDropout`` (attention weights
+included), inference attends with ``scaled_dot_product_attention``.
 
-Inference, and training on GPUs, run PyTorch's own layer unchanged (its fused kernels). In CPU training, PyTorch
-computes attention in ``scaled_dot_product_attention``, whose dropout on the attention weights draws its mask
-inside the kernel with the slow ``bernoulli_``; for the CPU-size denoiser those weights (heads x frames x frames
-per motion) are the largest tensors dropped. So the CPU training pass writes attention out (projection, scaled
-scores, softmax, dropout, weighted sum, output projection) with the layer's own parameters: the state dict is the
-parent's, and a checkpoint loads into either class.
+GPUs run PyTorch's own layer unchanged (its fused kernels). In CPU training, PyTorch computes attention in
+``scaled_dot_product_attention``, whose dropout on the attention weights draws its mask inside the kernel with the
+slow ``bernoulli_``; for the CPU-size denoiser those weights (heads x frames x frames per motion) are the largest
+tensors dropped, so the CPU training pass writes attention out (projection, scaled scores, softmax, dropout, weighted
+sum, output projection). CPU inference skips PyTorch's fused encoder-layer path, whose attention runs unfused
+(batched matmuls, a separate softmax, a q/k/v rescale pass) and slows down further with a padding mask: the layer
+written out around ``scaled_dot_product_attention`` (the CPU flash kernel) gives the same motions to float rounding
+in about half the time on a padded evaluation batch (docs/performance.md). Both use the layer's own parameters: the
+state dict is the parent's, and a checkpoint loads into either class.
 """
 
 from __future__ import annotations
@@ -21,6 +25,8 @@ from motiondiff.models.fast_dropout import FastDropout, fast_dropout
 class FastDropoutEncoderLayer(nn.TransformerEncoderLayer):
     """Same arguments and parameters as ``nn.TransformerEncoderLayer`` (batch_first=True only)."""
 
+    fused_inference = False  # True: CPU inference in PyTorch's fused layer (bench/encoder_attention.py's reference)
+
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         if not self.self_attn.batch_first or not self.self_attn._qkv_same_embed_dim:
@@ -29,22 +35,49 @@ class FastDropoutEncoderLayer(nn.TransformerEncoderLayer):
             FastDropout(d.p) for d in (self.dropout, self.dropout1, self.dropout2)
         )
 
+    def forward(self, src: Tensor, src_mask: Tensor | None = None, src_key_padding_mask: Tensor | None = None,
+                is_causal: bool = False) -> Tensor:  # fmt: skip
+        if self.training or src_mask is not None or is_causal or src.device.type != "cpu" or self.fused_inference:
+            return super().forward(src, src_mask, src_key_padding_mask, is_causal)
+        if self.norm_first:  # CPU inference: PyTorch's layer, its attention through scaled_dot_product_attention
+            x = src + self._attend(self.norm1(src), src_key_padding_mask)
+            return x + self._ff_block(self.norm2(x))
+        x = self.norm1(src + self._attend(src, src_key_padding_mask))
+        return self.norm2(x + self._ff_block(x))
+
     def _sa_block(self, x: Tensor, attn_mask: Tensor | None, key_padding_mask: Tensor | None, is_causal: bool = False):
         # GPUs: PyTorch's fused attention (flash / memory-efficient kernels) drops out cheaply and saves memory
         if not self.training or attn_mask is not None or is_causal or x.device.type != "cpu":
             return super()._sa_block(x, attn_mask, key_padding_mask, is_causal)
-        attn = self.self_attn
-        b, n, d = x.shape
-        heads = attn.num_heads
-        qkv = nn.functional.linear(x, attn.in_proj_weight, attn.in_proj_bias)
-        q, k, v = qkv.view(b, n, 3, heads, d // heads).permute(2, 0, 3, 1, 4)  # each (B, heads, N, d/heads)
-        scores = torch.matmul(q, k.transpose(-1, -2)) * (d // heads) ** -0.5
+        q, k, v = self._heads(x)
+        scores = torch.matmul(q, k.transpose(-1, -2)) * q.shape[-1] ** -0.5
         if key_padding_mask is not None:  # True / -inf: a key to ignore (the encoder may pass either form)
             pad = key_padding_mask[:, None, None, :]
             scores = scores.masked_fill(pad, float("-inf")) if pad.dtype == torch.bool else scores + pad
-        weights = fast_dropout(scores.softmax(dim=-1), attn.dropout, True)
-        out = torch.matmul(weights, v).transpose(1, 2).reshape(b, n, d)
-        return self.dropout1(attn.out_proj(out))
+        weights = fast_dropout(scores.softmax(dim=-1), self.self_attn.dropout, True)
+        return self.dropout1(self._merge(torch.matmul(weights, v)))
+
+    def _attend(self, x: Tensor, key_padding_mask: Tensor | None) -> Tensor:
+        """Self-attention without dropout (inference) in ``scaled_dot_product_attention``; the padding mask as
+        either form the encoder passes (True or -inf: a key to ignore)."""
+        mask = None
+        if key_padding_mask is not None:
+            pad = key_padding_mask[:, None, None, :]
+            mask = ~pad if pad.dtype == torch.bool else pad
+        q, k, v = self._heads(x)
+        return self._merge(nn.functional.scaled_dot_product_attention(q, k, v, attn_mask=mask))
+
+    def _heads(self, x: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        """q, k, v of ``x`` (B, N, d), each (B, heads, N, d / heads), from the layer's own projection."""
+        attn = self.self_attn
+        b, n, d = x.shape
+        qkv = nn.functional.linear(x, attn.in_proj_weight, attn.in_proj_bias)
+        return qkv.view(b, n, 3, attn.num_heads, d // attn.num_heads).permute(2, 0, 3, 1, 4)
+
+    def _merge(self, heads: Tensor) -> Tensor:
+        """(B, heads, N, d / heads) -> the output projection of (B, N, d)."""
+        b, h, n, dh = heads.shape
+        return self.self_attn.out_proj(heads.transpose(1, 2).reshape(b, n, h * dh))
 
 
 @dataclass(frozen=True)
