@@ -19,13 +19,14 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor, nn
 
+from motiondiff.models.backbones.cpu_attention import merge_heads, self_attention, self_qkv
 from motiondiff.models.fast_dropout import FastDropout, fast_dropout
 
 
 class FastDropoutEncoderLayer(nn.TransformerEncoderLayer):
     """Same arguments and parameters as ``nn.TransformerEncoderLayer`` (batch_first=True only)."""
 
-    fused_inference = False  # True: CPU inference in PyTorch's fused layer (bench/encoder_attention.py's reference)
+    fused_inference = False  # True: CPU inference in PyTorch's fused layer (bench/cpu_attention.py's reference)
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -49,35 +50,16 @@ class FastDropoutEncoderLayer(nn.TransformerEncoderLayer):
         # GPUs: PyTorch's fused attention (flash / memory-efficient kernels) drops out cheaply and saves memory
         if not self.training or attn_mask is not None or is_causal or x.device.type != "cpu":
             return super()._sa_block(x, attn_mask, key_padding_mask, is_causal)
-        q, k, v = self._heads(x)
+        q, k, v = self_qkv(self.self_attn, x)
         scores = torch.matmul(q, k.transpose(-1, -2)) * q.shape[-1] ** -0.5
         if key_padding_mask is not None:  # True / -inf: a key to ignore (the encoder may pass either form)
             pad = key_padding_mask[:, None, None, :]
             scores = scores.masked_fill(pad, float("-inf")) if pad.dtype == torch.bool else scores + pad
         weights = fast_dropout(scores.softmax(dim=-1), self.self_attn.dropout, True)
-        return self.dropout1(self._merge(torch.matmul(weights, v)))
+        return self.dropout1(merge_heads(self.self_attn, torch.matmul(weights, v)))
 
     def _attend(self, x: Tensor, key_padding_mask: Tensor | None) -> Tensor:
-        """Self-attention without dropout (inference) in ``scaled_dot_product_attention``; the padding mask as
-        either form the encoder passes (True or -inf: a key to ignore)."""
-        mask = None
-        if key_padding_mask is not None:
-            pad = key_padding_mask[:, None, None, :]
-            mask = ~pad if pad.dtype == torch.bool else pad
-        q, k, v = self._heads(x)
-        return self._merge(nn.functional.scaled_dot_product_attention(q, k, v, attn_mask=mask))
-
-    def _heads(self, x: Tensor) -> tuple[Tensor, Tensor, Tensor]:
-        """q, k, v of ``x`` (B, N, d), each (B, heads, N, d / heads), from the layer's own projection."""
-        attn = self.self_attn
-        b, n, d = x.shape
-        qkv = nn.functional.linear(x, attn.in_proj_weight, attn.in_proj_bias)
-        return qkv.view(b, n, 3, attn.num_heads, d // attn.num_heads).permute(2, 0, 3, 1, 4)
-
-    def _merge(self, heads: Tensor) -> Tensor:
-        """(B, heads, N, d / heads) -> the output projection of (B, N, d)."""
-        b, h, n, dh = heads.shape
-        return self.self_attn.out_proj(heads.transpose(1, 2).reshape(b, n, h * dh))
+        return self_attention(self.self_attn, x, key_padding_mask)
 
 
 @dataclass(frozen=True)
