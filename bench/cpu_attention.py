@@ -30,6 +30,21 @@ from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
 CAPTIONS = ("a person walks forward", "a person waves the right hand", "a person bows", "a person runs")
 
 
+def both_ways(layer_class, run, repeats: int) -> tuple[dict, dict]:
+    """Median seconds of ``run`` with ``layer_class``'s CPU inference in PyTorch's layer ("fused", first) and in
+    scaled_dot_product_attention ("sdpa"), in this process; and one output of each."""
+    row, outputs = {}, {}
+    try:
+        for name in ("fused", "sdpa"):
+            layer_class.fused_inference = name == "fused"
+            row[f"{name}_s"] = median_seconds(run, repeats=repeats, warmup=1)["median_s"]
+            outputs[name] = run()
+    finally:
+        layer_class.fused_inference = False
+    row["speedup"] = row["fused_s"] / row["sdpa_s"]
+    return row, outputs
+
+
 def measure(module, lengths: torch.Tensor, steps: int, repeats: int) -> dict:
     captions = [CAPTIONS[i % len(CAPTIONS)] for i in range(len(lengths))]
 
@@ -38,17 +53,8 @@ def measure(module, lengths: torch.Tensor, steps: int, repeats: int) -> dict:
         return generate_features(module, captions, lengths, len(lengths), gen, sampler="ddim", steps=steps,
                                  guidance=2.0)  # fmt: skip
 
-    row, outputs = {}, {}
-    for fused in (True, False):  # one process, the reference first
-        FastDropoutEncoderLayer.fused_inference = fused
-        name = "fused" if fused else "sdpa"
-        row[f"{name}_s"] = median_seconds(run, repeats=repeats, warmup=1)["median_s"]
-        outputs[name] = run()
-    FastDropoutEncoderLayer.fused_inference = False
-    row["speedup"] = row["fused_s"] / row["sdpa_s"]
-    row["max_difference"] = float(
-        max(np.abs(a - b).max() for a, b in zip(outputs["fused"], outputs["sdpa"], strict=True))
-    )
+    row, out = both_ways(FastDropoutEncoderLayer, run, repeats)
+    row["max_difference"] = float(max(np.abs(a - b).max() for a, b in zip(out["fused"], out["sdpa"], strict=True)))
     return row
 
 
@@ -65,15 +71,8 @@ def measure_decoder(lengths: torch.Tensor, repeats: int) -> dict:
         with torch.inference_mode():
             return stack(x, memory, tgt_key_padding_mask=pad)
 
-    row, outputs = {}, {}
-    for fused in (True, False):
-        CpuInferenceDecoderLayer.fused_inference = fused
-        name = "fused" if fused else "sdpa"
-        row[f"{name}_s"] = median_seconds(run, repeats=repeats, warmup=1)["median_s"]
-        outputs[name] = run()
-    CpuInferenceDecoderLayer.fused_inference = False
-    row["speedup"] = row["fused_s"] / row["sdpa_s"]
-    row["max_difference"] = float((outputs["fused"] - outputs["sdpa"])[~pad].abs().max())
+    row, out = both_ways(CpuInferenceDecoderLayer, run, repeats)
+    row["max_difference"] = float((out["fused"] - out["sdpa"])[~pad].abs().max())
     return row
 
 
