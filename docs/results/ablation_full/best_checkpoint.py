@@ -1,26 +1,23 @@
-"""The best-val-FID checkpoint of a cell, by its logged curve: `python best_checkpoint.py <condition>_<cell>`.
+"""The best-val-FID checkpoint of a cell: `python best_checkpoint.py <condition>_<cell>`.
 
-Lightning's best-FID callback can leave a stale best-fid-step*.ckpt behind when a sitting resumes from a last.ckpt
-written just before the best one of the same step (the resumed callback then compares against the older best), so
-neither the first nor the newest such file is safely the best. The lowest logged val FID is; its checkpoint is never
-removed (the callback only removes a file it has beaten). A logged step is one short of its checkpoint's.
+The lowest val FID saved in the cell's best-fid-step*.ckpt files (`motiondiff.runtime.best_checkpoints.best_of`, as
+`checkpoint=best` chooses): a run folder can hold a stale best file from a sitting resumed before the callback
+rebuilt its list on resume (commit c898a47), so neither the first nor the newest name is safely the best.
 """
 
 from __future__ import annotations
 
 import sys
 
-from report import RUNS, column, curve
+from report import RUNS
+
+from motiondiff.runtime.best_checkpoints import best_of
 
 
 def best_checkpoint(cell: str) -> str:
-    fid = column(curve(cell), "val/fid")
-    if not fid:
-        raise SystemExit(f"{cell}: no val/fid logged yet")
-    step = min(fid, key=lambda x: x[1])[0] + 1
-    path = RUNS / cell / "checkpoints" / f"best-fid-step{step:07d}.ckpt"
-    if not path.is_file():
-        raise SystemExit(f"{cell}: the lowest val FID is at step {step:,}, but {path} is missing")
+    path = best_of(sorted((RUNS / cell / "checkpoints").glob("best-fid-*.ckpt")), "val/fid")
+    if path is None:
+        raise SystemExit(f"{cell}: no best-fid checkpoint with a saved val/fid in {RUNS / cell / 'checkpoints'}")
     return str(path.relative_to(RUNS.parents[1]))
 
 
