@@ -8,7 +8,7 @@
 Each test clip is encoded, its posterior mean decoded, and the reconstruction compared with the clip: MPJPE in
 metres (global joints as decoded, and root-aligned as MLD reports), then the evaluate.py protocol with the
 reconstructions as the "generated" set (FID against the real clips, R-precision, Diversity; 20 replications of
-the caption draw, mean ± 95% CI). A level left out is the newest `best-mpjpe-*.ckpt` under outputs/vae/<level>.
+the caption draw, mean ± 95% CI). A level left out is the newest run's best-MPJPE checkpoint under outputs/vae/<level>.
 Writes <out>.md and <out>.json (default docs/results/guidedmotion/vae_levels).
 """
 
@@ -28,6 +28,7 @@ from motiondiff.eval.protocol import EvalClips, Evaluators, pad, replication_met
 from motiondiff.lit.vae import MotionVAEModule, mpjpe
 from motiondiff.model_files.loading import load_vae
 from motiondiff.models.vae import LEVEL_TOKENS
+from motiondiff.runtime.best_checkpoints import best_of
 from motiondiff.runtime.errors import UsageError
 from motiondiff.runtime.paths import REPO_DIR, shown
 from motiondiff.runtime.scripting import quiet_tool_caches, register_resolvers
@@ -46,7 +47,8 @@ def newest_checkpoint(level: str, outputs: Path) -> Path:
             f"no trained {level} VAE under {outputs / 'vae' / level}: train one (`python train_vae.py level={level}`) "
             f"or pass {level}=<path to a .ckpt>"
         )
-    return found[-1]
+    newest_run = found[-1].parent  # within it, the lowest saved MPJPE (a resumed run may hold a stale best file)
+    return best_of(sorted(newest_run.glob("best-mpjpe-*.ckpt")), "val/mpjpe") or found[-1]
 
 
 def load_level(path: Path) -> tuple[MotionVAEModule, dict]:
