@@ -24,7 +24,7 @@ from motiondiff.bench.timing import median_seconds
 from motiondiff.lit.generation import generate_features
 from motiondiff.model_files.loading import load_model
 from motiondiff.model_files.resolve import find_model
-from motiondiff.models.backbones.decoder_layer import CpuInferenceDecoderLayer
+from motiondiff.models.backbones.decoder_layer import FastDropoutDecoderLayer
 from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
 
 CAPTIONS = ("a person walks forward", "a person waves the right hand", "a person bows", "a person runs")
@@ -61,7 +61,7 @@ def measure(module, lengths: torch.Tensor, steps: int, repeats: int) -> dict:
 def measure_decoder(lengths: torch.Tensor, repeats: int) -> dict:
     """A trans_dec stack of the shipped model's size (d 128, 4 heads, ff 256, 4 layers) on a padded guided batch."""
     torch.manual_seed(0)
-    layer = CpuInferenceDecoderLayer(128, 4, 256, 0.1, activation="gelu", batch_first=True)
+    layer = FastDropoutDecoderLayer(128, 4, 256, 0.1, activation="gelu", batch_first=True)
     stack = torch.nn.TransformerDecoder(layer, num_layers=4).eval()
     frames = int(lengths.max())
     x, memory = torch.randn(2 * len(lengths), frames, 128), torch.randn(2 * len(lengths), 1, 128)
@@ -71,7 +71,7 @@ def measure_decoder(lengths: torch.Tensor, repeats: int) -> dict:
         with torch.inference_mode():
             return stack(x, memory, tgt_key_padding_mask=pad)
 
-    row, out = both_ways(CpuInferenceDecoderLayer, run, repeats)
+    row, out = both_ways(FastDropoutDecoderLayer, run, repeats)
     row["max_difference"] = float((out["fused"] - out["sdpa"])[~pad].abs().max())
     return row
 

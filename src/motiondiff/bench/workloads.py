@@ -46,11 +46,12 @@ def random_batch(batch: int, frames: int, seed: int = 0) -> dict[str, torch.Tens
             "cond": torch.randn(batch, COND_DIM, generator=g), "mask": torch.ones(batch, frames, dtype=torch.bool)}  # fmt: skip
 
 
-def batch_step(preset: str | dict, bf16: bool = False) -> Callable[[torch.Tensor, torch.Tensor, torch.Tensor], float]:
+def batch_step(preset: str | dict, bf16: bool = False,
+               model: MDMDenoiser | None = None) -> Callable[[torch.Tensor, torch.Tensor, torch.Tensor], float]:  # fmt: skip
     """``step(x0, mask, cond)``: one MDM training step as train.py runs it on a batch (B, N, 263) with its valid-frame
     mask (B, N) and caption features (B, 384): q_sample at random t, 10% condition drop, x0 loss, backward,
-    gradient clipping at 1.0 and AdamW, on one denoiser of ``preset`` kept across calls."""
-    model = build_denoiser(preset).train()
+    gradient clipping at 1.0 and AdamW, on one denoiser of ``preset`` (or ``model``) kept across calls."""
+    model = (model if model is not None else build_denoiser(preset)).train()
     diffusion = GaussianDiffusion(make_betas("cosine", 1000), prediction="x0")
     opt = torch.optim.AdamW(model.parameters(), lr=1e-4)
 

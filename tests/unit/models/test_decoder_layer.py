@@ -1,4 +1,5 @@
-"""The decoder layer's CPU inference (attention in scaled_dot_product_attention) against PyTorch's own layer."""
+"""The decoder layer's CPU passes (training with FastDropout, inference in scaled_dot_product_attention) against
+PyTorch's own layer."""
 
 from __future__ import annotations
 
@@ -6,14 +7,15 @@ import pytest
 import torch
 from torch import nn
 
-from motiondiff.models.backbones.decoder_layer import CpuInferenceDecoderLayer
+from motiondiff.models.backbones.decoder_layer import FastDropoutDecoderLayer
+from motiondiff.models.fast_dropout import FastDropout
 
 
-def _pair(norm_first: bool):
+def _pair(norm_first: bool, dropout: float = 0.1):
     torch.manual_seed(0)
     args = dict(activation="gelu", batch_first=True, norm_first=norm_first)
-    ref = nn.TransformerDecoderLayer(32, 4, 64, 0.1, **args)
-    ours = CpuInferenceDecoderLayer(32, 4, 64, 0.1, **args)
+    ref = nn.TransformerDecoderLayer(32, 4, 64, dropout, **args)
+    ours = FastDropoutDecoderLayer(32, 4, 64, dropout, **args)
     ours.load_state_dict(ref.state_dict())  # the same parameters, the same names
     return ref.eval(), ours.eval()
 
@@ -36,11 +38,45 @@ def test_inference_is_pytorchs_layer(padded, norm_first, memory_len):
             torch.testing.assert_close(yb[valid], ya[valid], atol=1e-5, rtol=0)
 
 
-def test_training_is_pytorchs_layer_unchanged():
-    ref, ours = _pair(False)
-    x, memory = torch.randn(2, 7, 32), torch.randn(2, 1, 32)
-    torch.manual_seed(5)
-    a = ref.train()(x, memory)
-    torch.manual_seed(5)
-    b = ours.train()(x, memory)
-    assert torch.equal(a, b)
+@pytest.mark.parametrize("memory_len", [1, 3])
+@pytest.mark.parametrize("norm_first", [False, True])
+@pytest.mark.parametrize("padded", [False, True])
+def test_training_pass_equals_pytorchs_layer_without_dropout(padded, norm_first, memory_len):
+    """With p = 0 the written-out attentions are the only difference: outputs and gradients agree through a stack."""
+    ref, ours = _pair(norm_first, dropout=0.0)
+    g = torch.Generator().manual_seed(2)
+    x, memory = torch.randn(3, 11, 32, generator=g), torch.randn(3, memory_len, 32, generator=g)
+    pad = torch.zeros(3, 11, dtype=torch.bool)
+    pad[1, 8:] = pad[2, 5:] = True
+    outs, grads = [], []
+    for layer in (ref, ours):
+        stack = nn.TransformerDecoder(layer, num_layers=2).train()
+        y = stack(x, memory, tgt_key_padding_mask=pad if padded else None)
+        valid = ~pad[..., None] if padded else torch.ones_like(y, dtype=torch.bool)
+        (y * valid).square().sum().backward()
+        outs.append(y[valid.expand_as(y)])
+        grads.append(torch.cat([p.grad.flatten() for p in stack.parameters()]))
+    torch.testing.assert_close(outs[1], outs[0], atol=1e-5, rtol=0)
+    torch.testing.assert_close(grads[1], grads[0], atol=1e-5, rtol=1e-4)
+
+
+@pytest.mark.parametrize("which", ["self_attn", "multihead_attn"])
+def test_training_drops_each_attentions_weights(which):
+    """Only one attention's dropout on: the training output changes from call to call and differs from inference;
+    with it off again, training equals inference."""
+    _, ours = _pair(False, dropout=0.0)
+    getattr(ours, which).dropout = 0.5
+    x, memory = torch.randn(2, 7, 32), torch.randn(2, 3, 32)
+    torch.manual_seed(0)
+    a, b = ours.train()(x, memory), ours.train()(x, memory)
+    with torch.no_grad():
+        clean = ours.eval()(x, memory)
+    assert not torch.allclose(a, b) and not torch.allclose(a, clean)
+    getattr(ours, which).dropout = 0.0
+    torch.testing.assert_close(ours.train()(x, memory), clean, atol=1e-5, rtol=0)
+
+
+def test_dropout_modules_are_the_fast_ones_with_the_same_probability():
+    _, ours = _pair(False)
+    assert all(isinstance(m, FastDropout) and m.p == 0.1 for m in (ours.dropout, ours.dropout1, ours.dropout2,
+                                                                     ours.dropout3))  # fmt: skip

@@ -47,13 +47,19 @@ def self_attention(attn: nn.MultiheadAttention, x: Tensor, key_padding_mask: Ten
     return merge_heads(attn, nn.functional.scaled_dot_product_attention(q, k, v, attn_mask=sdpa_mask(key_padding_mask)))
 
 
-def cross_attention(attn: nn.MultiheadAttention, x: Tensor, memory: Tensor,
-                    key_padding_mask: Tensor | None = None) -> Tensor:  # fmt: skip
-    """``attn(x, memory, memory)`` without dropout (inference) in ``scaled_dot_product_attention``."""
+def cross_qkv(attn: nn.MultiheadAttention, x: Tensor, memory: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+    """q of ``x`` (B, N, d), k and v of ``memory`` (B, M, d), each split into heads (B, heads, ·, d / heads)."""
     d, h = x.shape[-1], attn.num_heads
     w, b = attn.in_proj_weight, attn.in_proj_bias
     q = split_heads(nn.functional.linear(x, w[:d], b[:d]), h)
     k = split_heads(nn.functional.linear(memory, w[d : 2 * d], b[d : 2 * d]), h)
     v = split_heads(nn.functional.linear(memory, w[2 * d :], b[2 * d :]), h)
+    return q, k, v
+
+
+def cross_attention(attn: nn.MultiheadAttention, x: Tensor, memory: Tensor,
+                    key_padding_mask: Tensor | None = None) -> Tensor:  # fmt: skip
+    """``attn(x, memory, memory)`` without dropout (inference) in ``scaled_dot_product_attention``."""
+    q, k, v = cross_qkv(attn, x, memory)
     out = nn.functional.scaled_dot_product_attention(q, k, v, attn_mask=sdpa_mask(key_padding_mask))
     return merge_heads(attn, out)

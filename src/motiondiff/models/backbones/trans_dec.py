@@ -14,7 +14,7 @@ from typing import Any
 import torch
 from torch import Tensor, nn
 
-from motiondiff.models.backbones.decoder_layer import CpuInferenceDecoderLayer
+from motiondiff.models.backbones.decoder_layer import FastDropoutDecoderLayer
 from motiondiff.models.backbones.transformer import TransformerBackbone
 
 
@@ -27,7 +27,7 @@ class TransDecBackbone(TransformerBackbone):
 
     def build(self, layer_args: dict[str, Any], num_layers: int, input_token: bool = False) -> None:
         self.input_token = bool(input_token)
-        self.decoder = nn.TransformerDecoder(CpuInferenceDecoderLayer(**layer_args), num_layers=num_layers)
+        self.decoder = nn.TransformerDecoder(FastDropoutDecoderLayer(**layer_args), num_layers=num_layers)
 
     def forward(self, h: Tensor, token: Tensor, mask: Tensor | None = None) -> Tensor:
         seq = torch.cat([token.unsqueeze(1), h], dim=1) if self.input_token else h
