@@ -12,6 +12,8 @@ from __future__ import annotations
 import torch
 from torch import Tensor, nn
 
+from motiondiff.models.fast_dropout import fast_dropout
+
 
 def sdpa_mask(key_padding_mask: Tensor | None) -> Tensor | None:
     """A (B, N) key padding mask, in either form PyTorch's layers pass (True or -inf: a key to ignore), as the
@@ -63,3 +65,14 @@ def cross_attention(attn: nn.MultiheadAttention, x: Tensor, memory: Tensor,
     q, k, v = cross_qkv(attn, x, memory)
     out = nn.functional.scaled_dot_product_attention(q, k, v, attn_mask=sdpa_mask(key_padding_mask))
     return merge_heads(attn, out)
+
+
+def attend_dropping(q: Tensor, k: Tensor, v: Tensor, key_padding_mask: Tensor | None, p: float) -> Tensor:
+    """softmax(q kᵀ / √d) v with ``FastDropout`` p on the weights (CPU training): written out, because the attention
+    kernel would draw its dropout mask with the slow ``bernoulli_``. The padding mask in either form (True / -inf:
+    a key to ignore)."""
+    scores = torch.matmul(q, k.transpose(-1, -2)) * q.shape[-1] ** -0.5
+    if key_padding_mask is not None:
+        pad = key_padding_mask[:, None, None, :]
+        scores = scores.masked_fill(pad, float("-inf")) if pad.dtype == torch.bool else scores + pad
+    return torch.matmul(fast_dropout(scores.softmax(dim=-1), p, True), v)

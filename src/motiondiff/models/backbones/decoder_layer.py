@@ -12,11 +12,17 @@ state dict are the parent's, so a checkpoint loads into either class.
 
 from __future__ import annotations
 
-import torch
 from torch import Tensor, nn
 
-from motiondiff.models.backbones.cpu_attention import cross_attention, cross_qkv, merge_heads, self_attention, self_qkv
-from motiondiff.models.fast_dropout import FastDropout, fast_dropout
+from motiondiff.models.backbones.cpu_attention import (
+    attend_dropping,
+    cross_attention,
+    cross_qkv,
+    merge_heads,
+    self_attention,
+    self_qkv,
+)
+from motiondiff.models.fast_dropout import FastDropout
 
 
 class FastDropoutDecoderLayer(nn.TransformerDecoderLayer):
@@ -62,7 +68,8 @@ class FastDropoutDecoderLayer(nn.TransformerDecoderLayer):
         if not self.training or not self._own_attention(x, attn_mask, is_causal):
             return super()._sa_block(x, attn_mask, key_padding_mask, is_causal)
         q, k, v = self_qkv(self.self_attn, x)
-        return self.dropout1(merge_heads(self.self_attn, self._attend_dropping(q, k, v, key_padding_mask)))
+        out = attend_dropping(q, k, v, key_padding_mask, self.self_attn.dropout)
+        return self.dropout1(merge_heads(self.self_attn, out))
 
     def _mha_block(self, x: Tensor, mem: Tensor, attn_mask: Tensor | None, key_padding_mask: Tensor | None,
                    is_causal: bool = False) -> Tensor:  # fmt: skip
@@ -70,14 +77,4 @@ class FastDropoutDecoderLayer(nn.TransformerDecoderLayer):
             return super()._mha_block(x, mem, attn_mask, key_padding_mask, is_causal)
         attn = self.multihead_attn
         q, k, v = cross_qkv(attn, x, mem)
-        return self.dropout2(merge_heads(attn, self._attend_dropping(q, k, v, key_padding_mask, attn.dropout)))
-
-    def _attend_dropping(self, q: Tensor, k: Tensor, v: Tensor, key_padding_mask: Tensor | None,
-                         p: float | None = None) -> Tensor:  # fmt: skip
-        """softmax(q kᵀ / √d) v with dropout p (the self-attention's by default) on the weights."""
-        scores = torch.matmul(q, k.transpose(-1, -2)) * q.shape[-1] ** -0.5
-        if key_padding_mask is not None:  # True / -inf: a key to ignore (the decoder may pass either form)
-            pad = key_padding_mask[:, None, None, :]
-            scores = scores.masked_fill(pad, float("-inf")) if pad.dtype == torch.bool else scores + pad
-        p = self.self_attn.dropout if p is None else p
-        return torch.matmul(fast_dropout(scores.softmax(dim=-1), p, True), v)
+        return self.dropout2(merge_heads(attn, attend_dropping(q, k, v, key_padding_mask, attn.dropout)))

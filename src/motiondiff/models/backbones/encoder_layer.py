@@ -16,11 +16,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import torch
 from torch import Tensor, nn
 
-from motiondiff.models.backbones.cpu_attention import merge_heads, self_attention, self_qkv
-from motiondiff.models.fast_dropout import FastDropout, fast_dropout
+from motiondiff.models.backbones.cpu_attention import attend_dropping, merge_heads, self_attention, self_qkv
+from motiondiff.models.fast_dropout import FastDropout
 
 
 class FastDropoutEncoderLayer(nn.TransformerEncoderLayer):
@@ -50,13 +49,9 @@ class FastDropoutEncoderLayer(nn.TransformerEncoderLayer):
         # GPUs: PyTorch's fused attention (flash / memory-efficient kernels) drops out cheaply and saves memory
         if not self.training or attn_mask is not None or is_causal or x.device.type != "cpu":
             return super()._sa_block(x, attn_mask, key_padding_mask, is_causal)
-        q, k, v = self_qkv(self.self_attn, x)
-        scores = torch.matmul(q, k.transpose(-1, -2)) * q.shape[-1] ** -0.5
-        if key_padding_mask is not None:  # True / -inf: a key to ignore (the encoder may pass either form)
-            pad = key_padding_mask[:, None, None, :]
-            scores = scores.masked_fill(pad, float("-inf")) if pad.dtype == torch.bool else scores + pad
-        weights = fast_dropout(scores.softmax(dim=-1), self.self_attn.dropout, True)
-        return self.dropout1(merge_heads(self.self_attn, torch.matmul(weights, v)))
+        q, k, v = self_qkv(self.self_attn, x)  # the encoder may pass the padding mask as bool or -inf
+        out = attend_dropping(q, k, v, key_padding_mask, self.self_attn.dropout)
+        return self.dropout1(merge_heads(self.self_attn, out))
 
     def _attend(self, x: Tensor, key_padding_mask: Tensor | None) -> Tensor:
         return self_attention(self.self_attn, x, key_padding_mask)
