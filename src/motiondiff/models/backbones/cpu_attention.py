@@ -4,7 +4,8 @@ weights, for the CPU passes of this project's Transformer layers.
 PyTorch's inference paths on the CPU (the fused encoder layer, ``MultiheadAttention``'s native fast path) attend
 unfused (batched matmuls, a separate softmax, a q/k/v rescale pass) and slow down further with a padding mask;
 ``scaled_dot_product_attention`` (the CPU flash kernel) gives the same result to float rounding in less time
-(``bench/cpu_attention.py``).
+(``bench/cpu_attention.py``). CPU training attends with ``attend_dropping`` instead, so that the attention weights
+drop out with ``FastDropout`` (``bench/decoder_training.py``).
 """
 
 from __future__ import annotations
