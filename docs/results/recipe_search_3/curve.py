@@ -39,12 +39,23 @@ if len(sys.argv) > 1:
         csv.writer(f).writerows([COLUMNS] + [rows[k] for k in sorted(rows)])
 
 run_h = [(int(r["step"]) + CELL_STEPS, float(r["val/fid"])) for r in csv.DictReader(TABLE.open())]
-cell = sorted(val_rows(sorted((RESULTS / "ablation_full/cells/text_trans_dec_x0_hml263").glob("curve_steps_*.csv"))).values())
-enc = [(int(r["step"]), float(r["val/fid"])) for r in csv.DictReader((RESULTS / "recipe_search/final_run/in_training_val.csv").open())]
+cell = sorted(
+    val_rows(sorted((RESULTS / "ablation_full/cells/text_trans_dec_x0_hml263").glob("curve_steps_*.csv"))).values()
+)
+enc = [
+    (int(r["step"]), float(r["val/fid"]))
+    for r in csv.DictReader((RESULTS / "recipe_search/final_run/in_training_val.csv").open())
+]
 fig, ax = plt.subplots(figsize=(7.5, 4))
 ax.plot([r[0] for r in cell], [r[1] for r in cell], "o-", ms=3, label="trans_dec cell (issue 43; cosine to 15,000)")
 ax.plot(*zip(*run_h, strict=True), "o-", ms=3, label="run H (from the cell's 15,000; cosine restarted, to 25,000 more)")
-ax.plot(*zip(*enc, strict=True), "s--", ms=3, color="grey", label="recipe 1: trans_enc (cosine to 110,000; shipped at 42,000)")
+ax.plot(
+    *zip(*enc, strict=True),
+    "s--",
+    ms=3,
+    color="grey",
+    label="recipe 1: trans_enc (cosine to 110,000; shipped at 42,000)",
+)
 ax.axhline(1.004, color="C3", lw=0.8, ls=":", label="shipped model's in-training val FID (1.004, step 42,000)")
 ax.set(xscale="linear", yscale="log", xlabel="training step (trans_dec: cell + run H)", ylabel="in-training val FID (64 clips)",
        title="Recipe 3 (trans_dec): in-training val FID", xlim=(0, 100000))  # fmt: skip
