@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 import torch
+from fixtures.layer_pairs import padding_mask, valid_outputs_and_grads
 from torch import nn
 
 from motiondiff.models.backbones.decoder_layer import FastDropoutDecoderLayer
@@ -27,8 +28,7 @@ def test_inference_is_pytorchs_layer(padded, norm_first, memory_len):
     ref, ours = _pair(norm_first)
     g = torch.Generator().manual_seed(1)
     x, memory = torch.randn(3, 11, 32, generator=g), torch.randn(3, memory_len, 32, generator=g)
-    pad = torch.zeros(3, 11, dtype=torch.bool)
-    pad[1, 8:] = pad[2, 5:] = True
+    pad = padding_mask()
     mask = pad if padded else None
     valid = (~pad if padded else torch.ones_like(pad))[..., None].expand_as(x)
     with torch.inference_mode():
@@ -46,18 +46,15 @@ def test_training_pass_equals_pytorchs_layer_without_dropout(padded, norm_first,
     ref, ours = _pair(norm_first, dropout=0.0)
     g = torch.Generator().manual_seed(2)
     x, memory = torch.randn(3, 11, 32, generator=g), torch.randn(3, memory_len, 32, generator=g)
-    pad = torch.zeros(3, 11, dtype=torch.bool)
-    pad[1, 8:] = pad[2, 5:] = True
-    outs, grads = [], []
-    for layer in (ref, ours):
-        stack = nn.TransformerDecoder(layer, num_layers=2).train()
-        y = stack(x, memory, tgt_key_padding_mask=pad if padded else None)
-        valid = ~pad[..., None] if padded else torch.ones_like(y, dtype=torch.bool)
-        (y * valid).square().sum().backward()
-        outs.append(y[valid.expand_as(y)])
-        grads.append(torch.cat([p.grad.flatten() for p in stack.parameters()]))
-    torch.testing.assert_close(outs[1], outs[0], atol=1e-5, rtol=0)
-    torch.testing.assert_close(grads[1], grads[0], atol=1e-5, rtol=1e-4)
+    pad = padding_mask() if padded else None
+    (out_ref, grad_ref), (out_ours, grad_ours) = [
+        valid_outputs_and_grads(
+            nn.TransformerDecoder(layer, num_layers=2), lambda stack: stack(x, memory, tgt_key_padding_mask=pad), pad
+        )
+        for layer in (ref, ours)
+    ]
+    torch.testing.assert_close(out_ours, out_ref, atol=1e-5, rtol=0)
+    torch.testing.assert_close(grad_ours, grad_ref, atol=1e-5, rtol=1e-4)
 
 
 @pytest.mark.parametrize("which", ["self_attn", "multihead_attn"])

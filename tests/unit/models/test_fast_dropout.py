@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 import torch
+from fixtures.layer_pairs import padding_mask, valid_outputs_and_grads
 from torch import nn
 
 from motiondiff.models.backbones.encoder_layer import FastDropoutEncoderLayer
@@ -60,8 +61,7 @@ def _pair(dropout: float, norm_first: bool = False):
 def _inputs():
     g = torch.Generator().manual_seed(1)
     x = torch.randn(3, 11, 32, generator=g)
-    pad = torch.zeros(3, 11, dtype=torch.bool)
-    pad[1, 8:] = pad[2, 5:] = True  # padded keys
+    pad = padding_mask()  # padded keys
     return x, pad
 
 
@@ -89,16 +89,17 @@ def test_training_pass_equals_the_reference_without_dropout(padded):
     through nn.TransformerEncoder (which turns a bool padding mask into an additive float one)."""
     ref, fast = _pair(0.0)
     x, pad = _inputs()
-    outs, grads = [], []
-    for layer in (ref, fast):
-        enc = nn.TransformerEncoder(layer, num_layers=2, enable_nested_tensor=False).train()
-        y = enc(x, src_key_padding_mask=pad if padded else None)
-        valid = ~pad[..., None] if padded else torch.ones_like(y, dtype=torch.bool)
-        (y * valid).square().sum().backward()
-        outs.append(y[valid.expand_as(y)])
-        grads.append(torch.cat([p.grad.flatten() for p in enc.parameters()]))
-    torch.testing.assert_close(outs[1], outs[0], atol=1e-5, rtol=0)
-    torch.testing.assert_close(grads[1], grads[0], atol=1e-5, rtol=1e-4)
+    mask = pad if padded else None
+    (out_ref, grad_ref), (out_fast, grad_fast) = [
+        valid_outputs_and_grads(
+            nn.TransformerEncoder(layer, num_layers=2, enable_nested_tensor=False),
+            lambda enc: enc(x, src_key_padding_mask=mask),
+            mask,
+        )
+        for layer in (ref, fast)
+    ]
+    torch.testing.assert_close(out_fast, out_ref, atol=1e-5, rtol=0)
+    torch.testing.assert_close(grad_fast, grad_ref, atol=1e-5, rtol=1e-4)
 
 
 def test_training_drops_the_attention_weights():
