@@ -4,12 +4,15 @@ with the stopping rule's history, and stops when the rule says so. No test train
 
 from __future__ import annotations
 
+import pytest
 import torch
 from fixtures.in_process import run_entry
 from fixtures.tiny_models import TINY
 from hydra import compose, initialize_config_dir
+from hydra.utils import instantiate
 
 from motiondiff.cli.common import REPO_DIR, register_resolvers
+from motiondiff.data.datamodules import MIRRORED_REPRESENTATIONS
 
 
 def test_the_cell_preset_holds_the_plans_rules():
@@ -42,3 +45,14 @@ def test_a_cell_evaluates_by_steps_checkpoints_each_evaluation_and_stops_on_the_
     assert step == 4 and [s for s, _ in history] == [2, 4]  # stopped at 4: no 99 % gain over the last 2 steps
     assert [s for s, _ in saved("step0000002.ckpt")[1]] == [2]  # each checkpoint holds the evaluations so far
     assert list(ckpts.glob("best-fid-*.ckpt"))
+
+
+@pytest.mark.parametrize("cell", sorted(p.stem for p in (REPO_DIR / "conf" / "ablation").glob("*.yaml")))
+def test_every_cell_builds_its_datamodule_mirroring_only_what_has_an_exact_mirror(cell):
+    # the first try of the jp/rp6jr/rpqjr cells stopped at once on the preset's mirror: true (ablation_plan.md)
+    register_resolvers()
+    with initialize_config_dir(config_dir=str(REPO_DIR / "conf"), version_base="1.3"):
+        cfg = compose("train", overrides=["experiment=ablation_full", f"ablation={cell}"])
+    datamodule = instantiate(cfg.dataset.datamodule)  # builds nothing from data yet; refuses a mirror it cannot do
+    assert datamodule.representation_name == cfg.representation
+    assert datamodule.mirror == (cfg.representation in MIRRORED_REPRESENTATIONS)
