@@ -3,7 +3,7 @@ cell it starts from, beside the first recipe's trans_enc run, against trans_dec 
 
     python docs/results/recipe_search_3/curve.py [outputs/recipe_search_3/H]
 
-With a run folder, its csv logs are first collected into in_training_val.csv (committed); without, the plot is
+With a run folder, its csv logs are first merged into in_training_val.csv (committed); without, the plot is
 drawn from that file. The trans_dec cell's curve comes from docs/results/ablation_full/cells/, the trans_enc run's
 from docs/results/recipe_search/final_run/in_training_val.csv."""
 
@@ -33,8 +33,10 @@ def val_rows(paths) -> dict[int, list[float]]:
     return rows
 
 
-if len(sys.argv) > 1:
-    rows = val_rows(sorted(Path(sys.argv[1]).glob("csv/version_*/metrics.csv")))
+if len(sys.argv) > 1:  # the run folder's rows join the committed ones (a machine's folder may hold later sittings only)
+    rows = {int(r["step"]): [int(r["step"])] + [float(r[c] or "nan") for c in COLUMNS[1:]]
+            for r in csv.DictReader(TABLE.open())} if TABLE.is_file() else {}  # fmt: skip
+    rows |= val_rows(sorted(Path(sys.argv[1]).glob("csv/version_*/metrics.csv")))
     with TABLE.open("w", newline="") as f:
         csv.writer(f).writerows([COLUMNS] + [rows[k] for k in sorted(rows)])
 
