@@ -26,6 +26,7 @@ SHIPPED = [
     "bandai_text_cpu",
     "bandai_text_long_12k",
     "bandai_text_long_42k",
+    "bandai_text_trans_dec_40k",
     "bandai_action_cpu",
 ]
 

@@ -20,7 +20,7 @@ MODELS_DIR = REPO_DIR / "checkpoints" / "models"
 RELEASE_SUFFIXES = (".safetensors", ".json")
 # checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
 SHIPPED_MODELS = {
-    "text": MODELS_DIR / "bandai_text_long_42k.safetensors",  # docs/results/shipping/rules.md
+    "text": MODELS_DIR / "bandai_text_trans_dec_40k.safetensors",  # docs/results/shipping/rules.md (2026-12-07)
     "action": MODELS_DIR / "bandai_action_cpu.safetensors",
     "guidedmotion": MODELS_DIR / "bandai_guided_cpu.safetensors",  # with its three VAEs; docs/results/guidedmotion
 }
