@@ -42,8 +42,13 @@ def _distributed_training() -> bool:
 @contextlib.contextmanager
 def bf16_inference(model: nn.Module, device_type: str, enabled: bool = True):
     """bf16 autocast on ``device_type`` with ``model``'s matmul weights held in bf16 for the duration (nested and
-    concurrent uses of one model share one cast; the last to leave restores float32). Disabled: full precision."""
+    concurrent uses of one model share one cast; the last to leave restores float32). Disabled: full precision,
+    except inside an enabled block of the same model, whose weights are bf16 until it ends: there the block's bf16
+    goes on (a pipeline samples its edits in bf16 around library calls that default to full precision)."""
     if not enabled:
+        if id(model) in _active:
+            yield
+            return
         with torch.autocast(device_type, enabled=False):
             yield
         return

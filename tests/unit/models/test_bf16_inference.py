@@ -67,3 +67,17 @@ def test_disabled_is_full_precision():
     with torch.autocast("cpu", dtype=torch.bfloat16), bf16_inference(model, "cpu", enabled=False):
         out = model(x, t, cond=cond, mask=mask)
     assert out.dtype == torch.float32 and all(p.dtype == torch.float32 for p in model.parameters())
+
+
+def test_disabled_inside_an_enabled_block_of_the_same_model_keeps_its_bf16():
+    # MotionPipeline samples an edit under its bf16 block around edit functions whose generation defaults to full
+    # precision: full precision there would meet the block's bf16 weights without autocast (a dtype error)
+    model, other = _denoiser("trans_enc"), _denoiser("gru")
+    x, t, cond, mask = _inputs()
+    with torch.inference_mode(), bf16_inference(model, "cpu"):
+        expected = model(x, t, cond=cond, mask=mask)
+        with bf16_inference(model, "cpu", enabled=False):
+            assert torch.equal(model(x, t, cond=cond, mask=mask), expected)
+        with bf16_inference(other, "cpu", enabled=False):  # another model's full precision stays full precision
+            assert other(x, t, cond=cond, mask=mask).dtype == torch.float32
+    assert all(p.dtype == torch.float32 for p in model.parameters())
