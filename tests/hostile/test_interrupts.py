@@ -11,6 +11,8 @@ import pytest
 from hostile_cli import assert_refused, files_under, popen_cli, run_in_process
 from kill_runs import BANDAI, PREPARE
 
+from motiondiff.runtime.boundary import Stopped, _signal_behind, guarded
+
 PROMPTS = "".join(f"a person walks forward then turns {k} times\n" for k in range(20))
 
 
@@ -125,3 +127,20 @@ def test_prepare_stopped_while_it_builds_leaves_no_build_folder_or_lock(tmp_path
     completed = subprocess.CompletedProcess(proc.args, proc.returncode, stdout, stderr)
     assert_refused(completed, needle, "the output folder is as it was before", code=code)
     assert sorted(p.name for p in out.parent.iterdir()) == [], "a build folder, a lock or a half dataset was left"
+
+
+@pytest.mark.parametrize(("stop", "code", "line"), [(Stopped("stopped by SIGTERM"), 143, "error: stopped by SIGTERM"),
+                                                    (KeyboardInterrupt(), 130, "error: interrupted (Ctrl-C)")])  # fmt: skip
+def test_a_signal_that_an_import_turned_into_an_import_error_is_still_the_signal(capsys, stop, code, line):
+    # the sampling CLI's SIGTERM test once met it: the signal came during matplotlib's first import of its Agg
+    # backend, whose pybind11 initialisation re-raised it as ImportError('initialization failed') from the signal
+    def first_import():
+        try:
+            raise stop
+        except BaseException as err:
+            raise ImportError("initialization failed") from err
+
+    with pytest.raises(SystemExit) as exit_:
+        guarded(first_import)()
+    assert exit_.value.code == code and capsys.readouterr().err.strip() == line
+    assert _signal_behind(ImportError("initialization failed")) is None  # one of its own is no signal

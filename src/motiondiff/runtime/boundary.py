@@ -62,13 +62,12 @@ def guarded(fn):
     def wrapper(*args, **kwargs):
         try:
             return fn(*args, **kwargs)
-        except Stopped as stop:  # reported here, after the run folder and any progress bar are closed
-            print(f"error: {stop.line}", file=sys.stderr)
-            sys.exit(SIGTERM_EXIT)
-        except KeyboardInterrupt:
-            print("error: interrupted (Ctrl-C)", file=sys.stderr)
-            sys.exit(130)
+        except (Stopped, KeyboardInterrupt) as stop:  # reported here, after the run folder and any bar are closed
+            _exit_stopped(stop)
         except Exception as err:  # noqa: BLE001 - sorted into expected (one line) and bugs (re-raised)
+            stop = _signal_behind(err)
+            if stop is not None:  # a C extension's import that the signal interrupted re-raised it as ImportError
+                _exit_stopped(stop)
             line = error_line(err)
             if line is None:
                 raise
@@ -76,6 +75,28 @@ def guarded(fn):
             sys.exit(2)
 
     return wrapper
+
+
+def _exit_stopped(stop: BaseException):
+    """SIGTERM's line and exit 143, or Ctrl-C's and exit 130."""
+    if isinstance(stop, Stopped):
+        print(f"error: {stop.line}", file=sys.stderr)
+        sys.exit(SIGTERM_EXIT)
+    print("error: interrupted (Ctrl-C)", file=sys.stderr)
+    sys.exit(130)
+
+
+def _signal_behind(err: BaseException) -> BaseException | None:
+    """The SIGTERM (`Stopped`) or Ctrl-C that ``err`` was raised from or while handling, if any: pybind11 turns an
+    exception raised inside a module's initialisation (a signal arriving during a first `import`) into
+    ``ImportError('initialization failed')`` raised from it."""
+    seen = set()
+    while err is not None and id(err) not in seen:
+        seen.add(id(err))
+        if isinstance(err, Stopped | KeyboardInterrupt):
+            return err
+        err = err.__cause__ or err.__context__
+    return None
 
 
 SIGTERM_EXIT = 143  # 128 + SIGTERM, as a shell reports a process the signal ended
