@@ -129,8 +129,13 @@ def test_prepare_stopped_while_it_builds_leaves_no_build_folder_or_lock(tmp_path
     assert sorted(p.name for p in out.parent.iterdir()) == [], "a build folder, a lock or a half dataset was left"
 
 
-@pytest.mark.parametrize(("stop", "code", "line"), [(Stopped("stopped by SIGTERM"), 143, "error: stopped by SIGTERM"),
-                                                    (KeyboardInterrupt(), 130, "error: interrupted (Ctrl-C)")])  # fmt: skip
+@pytest.mark.parametrize(
+    ("stop", "code", "line"),
+    [
+        (Stopped("stopped by SIGTERM"), 143, "error: stopped by SIGTERM"),
+        (KeyboardInterrupt(), 130, "error: interrupted (Ctrl-C)"),
+    ],
+)
 def test_a_signal_that_an_import_turned_into_an_import_error_is_still_the_signal(capsys, stop, code, line):
     # the sampling CLI's SIGTERM test once met it: the signal came during matplotlib's first import of its Agg
     # backend, whose pybind11 initialisation re-raised it as ImportError('initialization failed') from the signal

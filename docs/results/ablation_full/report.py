@@ -228,8 +228,9 @@ def opening(all_rows: dict[str, list[dict]]) -> list[str]:
     out = [f"**What was trained.** {len(done)} of {len(rows)} cells have stopped and been tested; "
            f"{sum(r['steps'] for r in rows):,} training steps and {hours:.1f} h of sittings so far, on {cpus or '–'}. "
            "Every cell is the small model of `bandai_text_long` on the full Bandai set (real mocap; its text captions "
-           "are generated from the action and style labels; the hml263 cells also train on every clip's left-right mirror, the "
-           "jp, rp6jr and rpqjr cells do not: the plan's note of 2026-12-07), trained until its in-training val FID stopped improving "
+           "are generated from the action and style labels; the hml263 cells also train on every clip's left-right "
+           "mirror, the jp, rp6jr and rpqjr cells do not: the plan's note of 2026-12-07), trained until its in-training "
+           "val FID stopped improving "
            f"by {PLATEAU['min_gain']:.0%} over {PLATEAU['window']:,} steps (from step {PLATEAU['start']:,}) or to the "
            f"{CAP:,}-step cap; each is scored once on the test split with its best-val-FID checkpoint (20 "
            "replications, mean ± 95 % CI, DDIM-50, guidance 2). Rules: [ablation_plan.md](ablation_plan.md).", "",
