@@ -7,7 +7,7 @@
 # once on the test split (20 replications) into cells/<cond>_<cell>/test/. Stop a sitting with kill -9 <python pid>
 # (a background job ignores SIGINT): the checkpoint after the latest evaluation, at most 1,000 steps back, is where
 # the next sitting starts. An ε cell is also tested with eps_fix's S3 sampling (MDM's DDIM steps and the static x̂0
-# clip), beside the default, for issue 43 point 2's account (docs/results/eps_fix/rules.md).
+# clip), beside its own (MDM's DDIM steps), for issue 43 point 2's account (docs/results/eps_fix/rules.md).
 # Edit this file only by writing a copy and moving it over (a running bash reads its script as it goes).
 set -u
 cd "$(dirname "$0")/../../.."; source .venv/bin/activate; source docs/results/sittings.sh; use_tcmalloc
@@ -18,6 +18,9 @@ case $COND in
   none) EXTRA="condition=none loss=geometric";;
   *) echo "condition must be text, action or none, got $COND"; exit 2;;
 esac
+# The ε cells train with the geometric terms times abar_t and sample with MDM's DDIM steps (never t = 999):
+# docs/results/eps_fix/rules.md, amendment 2 (2026-12-07); the x0 and v cells keep MDM's unweighted terms, uniform steps
+[[ $CELL == eps_* ]] && EXTRA="$EXTRA loss.time_weighting=alpha_bar diffusion.timestep_spacing=leading"
 NAME=${COND}_${CELL}; HERE=docs/results/ablation_full
 RUN=outputs/ablation_full/$NAME; SITTING=$HERE/sittings/$NAME.ckpt; CELLDIR=$HERE/cells/$NAME
 finished() {  # the cap reached, or the plateau rule fired at the last evaluation (both read from the preset)
