@@ -54,7 +54,9 @@ def test_training_pass_equals_pytorchs_layer_without_dropout(padded, norm_first,
         for layer in (ref, ours)
     ]
     torch.testing.assert_close(out_ours, out_ref, atol=1e-5, rtol=0)
-    torch.testing.assert_close(grad_ours, grad_ref, atol=1e-5, rtol=1e-4)
+    # 3e-5: with two torch threads the gradients' reductions run in another order (1.2e-5 apart at one element of
+    # 25,664 in the post-norm, one-key case; one thread: within 1e-5)
+    torch.testing.assert_close(grad_ours, grad_ref, atol=3e-5, rtol=1e-4)
 
 
 @pytest.mark.parametrize("which", ["self_attn", "multihead_attn"])

@@ -39,6 +39,25 @@ def test_fast_dropout_is_unbiased_and_its_gradient_is_the_same_mask():
     assert torch.equal(fast_dropout(x, 0.1, training=False), x) and torch.equal(fast_dropout(x, 0.0), x)
 
 
+@pytest.mark.parametrize("dtype", [torch.float32, torch.bfloat16])
+def test_the_multiplied_mask_gives_the_numbers_of_a_selected_one(dtype):
+    """The 0/1 mask in the activation's dtype is the bool mask of the same draws, and multiplying by it gives, to the
+    bit, what selecting with torch.where gave (forward and gradient)."""
+    torch.manual_seed(5)
+    boolean, keep = keep_mask((37, 129), 0.1)
+    torch.manual_seed(5)
+    numeric, same_keep = keep_mask((37, 129), 0.1, dtype=dtype)
+    assert numeric.dtype == dtype and keep == same_keep and torch.equal(numeric.bool(), boolean)
+    x = torch.randn(37, 129).to(dtype).requires_grad_()
+    torch.manual_seed(5)
+    y = fast_dropout(x, 0.1)
+    g = torch.randn(37, 129).to(dtype)
+    y.backward(g)
+    assert y.dtype == dtype
+    assert torch.equal(y.detach(), torch.where(boolean, x.detach(), 0.0).mul_(1 / keep))
+    assert torch.equal(x.grad, torch.where(boolean, g, 0.0).mul_(1 / keep))
+
+
 def test_fast_dropout_repeats_under_the_same_seed():
     x = torch.randn(64, 64)
     torch.manual_seed(3)
