@@ -52,3 +52,14 @@ cell_until_step() {
   grep -q "stopped after its step-$steps" $cells/${cond}_$cell/sittings.log || \
     echo "$(date -u +%FT%TZ) sitting stopped after its step-$steps checkpoint ($why)" >> $cells/${cond}_$cell/sittings.log
 }
+
+# copy_cell_curves RUN CELLDIR: each sitting's CSV log of RUN into CELLDIR, named by the steps it holds (a longer copy
+# of the same sitting replaces a shorter one).
+copy_cell_curves() {
+  local run=$1 celldir=$2 f first last
+  for f in $run/csv/version_*/metrics.csv; do
+    [ -f "$f" ] || continue
+    read -r first last < <(awk -F, 'NR==1{for(i=1;i<=NF;i++) if($i=="step") c=i; next} $c!=""{if(min==""||$c<min)min=$c; if($c>max)max=$c} END{print min+0, max+0}' "$f")
+    rm -f $celldir/curve_steps_${first}-*.csv; cp "$f" $celldir/curve_steps_${first}-${last}.csv
+  done
+}

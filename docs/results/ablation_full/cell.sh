@@ -42,13 +42,7 @@ capped = c["global_step"] >= cfg.trainer.max_steps
 sys.exit(0 if capped or plateaued(h, rule.min_gain, rule.window, rule.start, rule.mode) else 1)
 PY
 }
-copy_curves() {  # each sitting's CSV log beside sittings.log, named by the steps it holds (a longer copy replaces a shorter)
-  for f in $RUN/csv/version_*/metrics.csv; do
-    [ -f "$f" ] || continue
-    read -r first last < <(awk -F, 'NR==1{for(i=1;i<=NF;i++) if($i=="step") c=i; next} $c!=""{if(min==""||$c<min)min=$c; if($c>max)max=$c} END{print min+0, max+0}' "$f")
-    rm -f $CELLDIR/curve_steps_${first}-*.csv; cp "$f" $CELLDIR/curve_steps_${first}-${last}.csv
-  done
-}
+copy_curves() { copy_cell_curves $RUN $CELLDIR; }  # each sitting's CSV log beside sittings.log (sittings.sh)
 ck=$(resume_arg $RUN $SITTING)
 mkdir -p $CELLDIR
 if ! finished; then
