@@ -35,26 +35,27 @@ def fast_cpu_precision() -> str:
 @functools.cache
 def bf16_matmul_is_faster(rows: int, inner: int, cols: int) -> bool:
     """Whether a (rows x inner) @ (inner x cols) product, the weight cast to bf16 as autocast does it on every call,
-    runs faster in bf16 than in float32 on this CPU (median of 5 after a warm-up; about 0.1 s once per shape).
-    Native bf16 is not always a gain: on an AVX512-BF16 CPU without AMX a small model sampled 5x slower in bf16."""
+    runs faster in bf16 than in float32 on this CPU (medians of 7 after a warm-up; about 0.1 s once per shape).
+    Native bf16 is not always a gain: on an AVX512-BF16 CPU without AMX a small model sampled 5x slower in bf16.
+    The two are timed in turn, so that a burst of load (another process starting) slows both alike: timed one block
+    after the other, a burst once made the shipped text model's evaluation pick float32 (370 s against 283 s in bf16
+    on a 2-core EPYC, the same numbers; docs/results/evaluation_speed)."""
     if not cpu_has_fast_bf16():
         return False
     import time
 
     x, w = torch.randn(rows, inner), torch.randn(inner, cols)
-
-    def seconds(fn) -> float:
-        fn()
-        times = []
-        for _ in range(5):
-            start = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - start)
-        return sorted(times)[2]
-
+    candidates = {"fp32": lambda: x @ w, "bf16": lambda: x.to(torch.bfloat16) @ w.to(torch.bfloat16)}
+    times: dict[str, list[float]] = {name: [] for name in candidates}
     with torch.inference_mode():
-        fp32 = seconds(lambda: x @ w)
-        bf16 = seconds(lambda: x.to(torch.bfloat16) @ w.to(torch.bfloat16))
+        for fn in candidates.values():  # warm-up
+            fn()
+        for _ in range(7):
+            for name, fn in candidates.items():
+                start = time.perf_counter()
+                fn()
+                times[name].append(time.perf_counter() - start)
+    fp32, bf16 = (sorted(times[name])[3] for name in candidates)
     return bf16 < 0.9 * fp32
 
 
