@@ -1,0 +1,63 @@
+"""Issue 43 point 2's account: how well an ε model and an x0 model of the full Bandai set predict the clean motion at
+each noise level, and how much each training loss weighs that error there.
+
+    .venv/bin/python docs/results/eps_fix/per_t_error.py <model> <model> ... > out.md
+
+For each model (a .ckpt or release) and t in T_VALUES: real val clips (the first CLIPS with at least FRAMES frames,
+normalised features) noised to t with NOISES draws each, the unconditioned branch; the RMS of x̂0 − x0 and of
+ε̂ − ε, whatever the network predicts. Beside them, the weight the ε loss gives to x̂0's error at t (SNR(t): the ε
+loss is SNR(t) times the x0 loss) against the x0 loss's 1.
+"""
+
+import sys
+
+import torch
+
+from motiondiff.data.datamodules import PreparedDataModule
+from motiondiff.model_files.loading import load_model
+
+CLIPS, FRAMES, NOISES = 32, 80, 2
+T_VALUES = (999, 980, 900, 700, 500, 300, 100, 20)
+
+
+def errors(model, x0: torch.Tensor) -> list[tuple[int, float, float]]:
+    mask, drop = torch.ones(x0.shape[:2], dtype=torch.bool), torch.ones(len(x0), dtype=torch.bool)
+    generator, rows = torch.Generator().manual_seed(0), []
+    for t in T_VALUES:
+        steps = torch.full((len(x0),), t)
+        se_x0 = se_eps = 0.0
+        for _ in range(NOISES):
+            eps = torch.randn(x0.shape, generator=generator)
+            x_t = model.diffusion.q_sample(x0, steps, eps)
+            with torch.no_grad():
+                out = model.denoiser(x_t, steps, cond=None, mask=mask, drop_cond=drop)
+                x0_hat = model.diffusion.to_x0(out, x_t, steps)
+            eps_hat = model.diffusion.eps_from_x0(x0_hat, x_t, steps)
+            se_x0 += float((x0_hat - x0).pow(2).mean()) / NOISES
+            se_eps += float((eps_hat - eps).pow(2).mean()) / NOISES
+        rows.append((t, se_x0**0.5, se_eps**0.5))
+    return rows
+
+
+def main() -> None:
+    dm = PreparedDataModule("data/bandai", batch_size=8, max_frames=FRAMES)
+    dm.setup("fit")
+    val = dm.dataset("val")
+    items = (val[i] for i in range(len(val)))
+    clips = [it["motion"][:FRAMES] for it in items if len(it["motion"]) >= FRAMES][:CLIPS]
+    x0 = torch.stack([torch.as_tensor(c) for c in clips]).float()
+    models = [(path, load_model(path)) for path in sys.argv[1:]]
+    snr = models[0][1].diffusion.snr
+    print(f"`{' '.join(sys.argv)}`: {len(clips)} real val clips of the full Bandai set, {FRAMES} frames, normalised "
+          f"features, {NOISES} noise draws each, the unconditioned branch (seed 0).\n")
+    head = " | ".join(f"{p.split('/')[-1]}: RMS x̂0 − x0 | RMS ε̂ − ε" for p, _ in models)
+    print(f"| t | SNR(t): the ε loss's weight on x̂0's error (x0 loss: 1) | {head} |")
+    print("|---:|---:|" + "---:|---:|" * len(models))
+    table = [errors(m, x0) for _, m in models]
+    for i, t in enumerate(T_VALUES):
+        cells = " | ".join(f"{rows[i][1]:.3g} | {rows[i][2]:.3g}" for rows in table)
+        print(f"| {t} | {float(snr[t]):.3g} | {cells} |")
+
+
+if __name__ == "__main__":
+    main()
