@@ -5,9 +5,9 @@ PyTorch's CPU dropout draws its mask with ``bernoulli_`` at about 90 M elements/
 comes from raw 64-bit random words (``random_``), read as eight 8-bit numbers each and compared with a threshold
 (twice as fast as 16-bit numbers, which took 12 ms per 8 M elements against 6). The comparison writes the mask as
 0/1 in the activation's dtype, kept for the backward pass, and both passes multiply by it, then by the scale: on a
-bf16 tensor a multiply is vectorised where ``torch.where`` with a bool mask and a bool-to-bf16 cast are not (about 5x
-faster per pass; docs/performance.md). The numbers are the same as with ``torch.where`` (x * 1 = x, x * 0 = 0 for
-finite x). On other devices this is ``F.dropout``.
+bf16 tensor a multiply is vectorised where ``torch.where`` with a bool mask and a bool-to-bf16 cast are not
+(docs/performance.md). The numbers are the same as with ``torch.where`` (x * 1 = x, x * 0 = 0 for finite x). On
+other devices this is ``F.dropout``.
 
 The keep probability is rounded to a multiple of 1/256 (0.9 -> 0.8984, so p = 0.1 drops 10.16%); the kept values
 are scaled by the reciprocal of that rounded probability, so the output's expectation is the input exactly. The words come from

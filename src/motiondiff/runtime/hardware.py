@@ -37,9 +37,8 @@ def bf16_matmul_is_faster(rows: int, inner: int, cols: int) -> bool:
     """Whether a (rows x inner) @ (inner x cols) product, the weight cast to bf16 as autocast does it on every call,
     runs faster in bf16 than in float32 on this CPU (medians of 7 after a warm-up; about 0.1 s once per shape).
     Native bf16 is not always a gain: on an AVX512-BF16 CPU without AMX a small model sampled 5x slower in bf16.
-    The two are timed in turn, so that a burst of load (another process starting) slows both alike: timed one block
-    after the other, a burst once made the shipped text model's evaluation pick float32 (370 s against 283 s in bf16
-    on a 2-core EPYC, the same numbers; docs/results/evaluation_speed)."""
+    The two are timed in turn, so that a burst of load (another process starting) slows both alike rather than one
+    block of them (docs/results/evaluation_speed)."""
     if not cpu_has_fast_bf16():
         return False
     import time
