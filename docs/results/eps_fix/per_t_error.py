@@ -39,6 +39,13 @@ def errors(model, x0: torch.Tensor) -> list[tuple[int, float, float]]:
     return rows
 
 
+def label(path: str) -> str:
+    """A run's checkpoint by its run folder and file (<run>/checkpoints/<file>.ckpt), a release by its name."""
+    parts = path.rstrip("/").split("/")
+    name = parts[-1].removesuffix(".ckpt").removesuffix(".safetensors")
+    return f"{parts[-3]} {name}" if len(parts) >= 3 and parts[-2] == "checkpoints" else name
+
+
 def main() -> None:
     dm = PreparedDataModule("data/bandai", batch_size=8, max_frames=FRAMES)
     dm.setup("fit")
@@ -48,9 +55,11 @@ def main() -> None:
     x0 = torch.stack([torch.as_tensor(c) for c in clips]).float()
     models = [(path, load_model(path)) for path in sys.argv[1:]]
     snr = models[0][1].diffusion.snr
-    print(f"`{' '.join(sys.argv)}`: {len(clips)} real val clips of the full Bandai set, {FRAMES} frames, normalised "
-          f"features, {NOISES} noise draws each, the unconditioned branch (seed 0).\n")
-    head = " | ".join(f"{p.split('/')[-1]}: RMS x̂0 − x0 | RMS ε̂ − ε" for p, _ in models)
+    print(
+        f"`{' '.join(sys.argv)}`: {len(clips)} real val clips of the full Bandai set, {FRAMES} frames, normalised "
+        f"features, {NOISES} noise draws each, the unconditioned branch (seed 0).\n"
+    )
+    head = " | ".join(f"{label(p)}: RMS x̂0 − x0 | RMS ε̂ − ε" for p, _ in models)
     print(f"| t | SNR(t): the ε loss's weight on x̂0's error (x0 loss: 1) | {head} |")
     print("|---:|---:|" + "---:|---:|" * len(models))
     table = [errors(m, x0) for _, m in models]
