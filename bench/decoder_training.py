@@ -21,7 +21,7 @@ from pathlib import Path
 import torch
 
 from motiondiff.bench.report import machine
-from motiondiff.bench.workloads import COND_DIM, FEATURE_DIM, batch_step
+from motiondiff.bench.workloads import COND_DIM, FEATURE_DIM, batch_step, window_batch
 from motiondiff.models.backbones.decoder_layer import FastDropoutDecoderLayer
 from motiondiff.models.denoiser import MDMDenoiser
 
@@ -51,11 +51,7 @@ def main() -> None:
                                    input_token=args.input_token)  # fmt: skip
     assert all(isinstance(layer, FastDropoutDecoderLayer) for layer in ours.backbone.decoder.layers)
     steps = {"pytorch": batch_step("cpu", model=with_pytorch_layers(ours)), "fast": batch_step("cpu", model=ours)}
-    g = torch.Generator().manual_seed(1)
-    lengths = torch.randint(40, 121, (args.batch,), generator=g)
-    x0 = torch.randn(args.batch, 120, FEATURE_DIM, generator=g)
-    mask = torch.arange(120)[None] < lengths[:, None]
-    cond = torch.randn(args.batch, COND_DIM, generator=g)
+    x0, mask, cond = window_batch(args.batch)
     times: dict[str, list[float]] = {name: [] for name in steps}
     for i in range(args.repeats + 1):  # the first round warms up
         for name, step in steps.items():

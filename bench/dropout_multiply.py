@@ -24,7 +24,7 @@ import torch
 
 from motiondiff.bench.flops import count_flops, matmul_flops_per_s
 from motiondiff.bench.report import machine
-from motiondiff.bench.workloads import COND_DIM, FEATURE_DIM, batch_step
+from motiondiff.bench.workloads import COND_DIM, FEATURE_DIM, batch_step, window_batch
 from motiondiff.models import fast_dropout as fd
 from motiondiff.models.denoiser import MDMDenoiser
 
@@ -68,11 +68,7 @@ def main() -> None:
     info = machine()
     bf16 = bool(info.get("native_bf16"))
     dtype = torch.bfloat16 if bf16 else torch.float32
-    g = torch.Generator().manual_seed(1)
-    lengths = torch.randint(40, 121, (args.batch,), generator=g)
-    x0 = torch.randn(args.batch, 120, FEATURE_DIM, generator=g)
-    mask = torch.arange(120)[None] < lengths[:, None]
-    cond = torch.randn(args.batch, COND_DIM, generator=g)
+    x0, mask, cond = window_batch(args.batch)
     peak = matmul_flops_per_s(4096, 2048, 2048, dtype=dtype, repeats=5)["flops_per_s"]
     rows, record = [], {"machine": info, "dtype": str(dtype), "matmul_peak_flops_per_s": peak, "backbones": {}}
     for backbone in ("trans_enc", "trans_dec"):

@@ -46,6 +46,17 @@ def random_batch(batch: int, frames: int, seed: int = 0) -> dict[str, torch.Tens
             "cond": torch.randn(batch, COND_DIM, generator=g), "mask": torch.ones(batch, frames, dtype=torch.bool)}  # fmt: skip
 
 
+def window_batch(batch: int, frames: int = 120, shortest: int = 40,
+                 seed: int = 1) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:  # fmt: skip
+    """``(x0, mask, cond)`` for ``batch_step``: random clips padded to ``frames`` with valid lengths drawn over
+    ``shortest``-``frames`` (the full-Bandai recipe's 40-120-frame windows), random caption features."""
+    g = torch.Generator().manual_seed(seed)
+    lengths = torch.randint(shortest, frames + 1, (batch,), generator=g)
+    x0 = torch.randn(batch, frames, FEATURE_DIM, generator=g)
+    mask = torch.arange(frames)[None] < lengths[:, None]
+    return x0, mask, torch.randn(batch, COND_DIM, generator=g)
+
+
 def batch_step(preset: str | dict, bf16: bool = False,
                model: MDMDenoiser | None = None) -> Callable[[torch.Tensor, torch.Tensor, torch.Tensor], float]:  # fmt: skip
     """``step(x0, mask, cond)``: one MDM training step as train.py runs it on a batch (B, N, 263) with its valid-frame
