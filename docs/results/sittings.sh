@@ -29,6 +29,12 @@ print(f"{torch.get_num_threads()} torch threads, {p()}")')
   echo "$(date -u +%FT%TZ) sitting starts ($cpu, $(nproc --all) cores, $torch_side, ${2:-from scratch})" >> "$1"
 }
 
+# until_written FILE: wait until FILE has stopped growing (a checkpoint being saved is complete).
+until_written() {
+  local size=-1
+  while [ "$(stat -c %s "$1" 2>/dev/null)" != "$size" ]; do size=$(stat -c %s "$1"); sleep 5; done
+}
+
 # until_checkpoint CKPT LOG COMMAND...: run COMMAND in the background until CKPT exists and has stopped growing, then
 # kill it (kill -9: a background job ignores SIGINT); returns at once when CKPT is already there.
 until_checkpoint() {
@@ -36,7 +42,7 @@ until_checkpoint() {
   [ -f "$ckpt" ] && return 0
   "$@" > "$log" 2>&1 & local pid=$!
   while [ ! -f "$ckpt" ] && kill -0 $pid 2>/dev/null; do sleep 10; done
-  local size=-1; while [ "$(stat -c %s "$ckpt" 2>/dev/null)" != "$size" ]; do size=$(stat -c %s "$ckpt"); sleep 5; done
+  until_written "$ckpt"
   pkill -9 -P $pid; kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
   [ -f "$ckpt" ]
 }

@@ -19,11 +19,11 @@ while [ "$(newest)" == "$before" ]; do
   kill -0 "$train" 2>/dev/null || { echo "the training of $NAME ended by itself"; exit 1; }
   sleep 10
 done
-ckpt=$(newest); last=$RUN/checkpoints/last.ckpt; size=-1
-while [ "$(stat -c %s "$ckpt")" != "$size" ]; do size=$(stat -c %s "$ckpt"); sleep 5; done
+ckpt=$(newest); last=$RUN/checkpoints/last.ckpt
+until_written "$ckpt"
 # last.ckpt (where the next sitting resumes) is written after the step file: wait until it is as new and complete
 while [ ! "$last" -nt "$ckpt" ] && [ "$(stat -c %Y "$last")" != "$(stat -c %Y "$ckpt")" ]; do sleep 5; done
-size=-1; while [ "$(stat -c %s "$last")" != "$size" ]; do size=$(stat -c %s "$last"); sleep 5; done
+until_written "$last"
 kill -9 "$chain" "$cell" "$train" 2>/dev/null
 step=$(basename "$ckpt" .ckpt | sed 's/^step0*//' | sed ':a;s/\B[0-9]\{3\}\>/,&/;ta')
 echo "$(date -u +%FT%TZ) sitting stopped by hand after its step-$step checkpoint ($WHY)" >> "$CELLDIR/sittings.log"
