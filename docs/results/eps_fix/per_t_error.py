@@ -14,29 +14,11 @@ import sys
 import torch
 
 from motiondiff.data.datamodules import PreparedDataModule
+from motiondiff.eval.prediction_error import prediction_errors
 from motiondiff.model_files.loading import load_model
 
 CLIPS, FRAMES, NOISES = 32, 80, 2
 T_VALUES = (999, 980, 900, 700, 500, 300, 100, 20)
-
-
-def errors(model, x0: torch.Tensor) -> list[tuple[int, float, float]]:
-    mask, drop = torch.ones(x0.shape[:2], dtype=torch.bool), torch.ones(len(x0), dtype=torch.bool)
-    generator, rows = torch.Generator().manual_seed(0), []
-    for t in T_VALUES:
-        steps = torch.full((len(x0),), t)
-        se_x0 = se_eps = 0.0
-        for _ in range(NOISES):
-            eps = torch.randn(x0.shape, generator=generator)
-            x_t = model.diffusion.q_sample(x0, steps, eps)
-            with torch.no_grad():
-                out = model.denoiser(x_t, steps, cond=None, mask=mask, drop_cond=drop)
-                x0_hat = model.diffusion.to_x0(out, x_t, steps)
-            eps_hat = model.diffusion.eps_from_x0(x0_hat, x_t, steps)
-            se_x0 += float((x0_hat - x0).pow(2).mean()) / NOISES
-            se_eps += float((eps_hat - eps).pow(2).mean()) / NOISES
-        rows.append((t, se_x0**0.5, se_eps**0.5))
-    return rows
 
 
 def label(path: str) -> str:
@@ -62,7 +44,7 @@ def main() -> None:
     head = " | ".join(f"{label(p)}: RMS x̂0 − x0 | RMS ε̂ − ε" for p, _ in models)
     print(f"| t | SNR(t): the ε loss's weight on x̂0's error (x0 loss: 1) | {head} |")
     print("|---:|---:|" + "---:|---:|" * len(models))
-    table = [errors(m, x0) for _, m in models]
+    table = [prediction_errors(m, x0, T_VALUES, NOISES) for _, m in models]
     for i, t in enumerate(T_VALUES):
         cells = " | ".join(f"{rows[i][1]:.3g} | {rows[i][2]:.3g}" for rows in table)
         print(f"| {t} | {float(snr[t]):.3g} | {cells} |")

@@ -18,6 +18,7 @@ import torch
 import motiondiff.diffusion.samplers as samplers
 from motiondiff.data.datamodules import PreparedDataModule, embedded_data_root
 from motiondiff.diffusion.schedules import make_betas
+from motiondiff.eval.prediction_error import prediction_errors as errors
 from motiondiff.lit.generation import generate_features
 from motiondiff.metrics.spread import smoothness
 from motiondiff.model_files.loading import load_model
@@ -53,17 +54,9 @@ def prediction_errors(model, val) -> list[str]:
     """RMS of ε̂ − ε and of x̂0 − x0 on 16 real val clips noised to t (the unconditioned branch, seed 0)."""
     clips = [it["motion"][:FRAMES] for it in (val[i] for i in range(len(val))) if len(it["motion"]) >= FRAMES][:16]
     x0 = torch.stack([torch.as_tensor(np.asarray(c)) for c in clips]).float()
-    mask, drop = torch.ones(x0.shape[:2], dtype=torch.bool), torch.ones(len(x0), dtype=torch.bool)
-    generator, rows = torch.Generator().manual_seed(0), []
-    for t in (999, 980, 900, 500, 100, 10):
-        steps = torch.full((len(x0),), t)
-        eps = torch.randn(x0.shape, generator=generator)
-        x_t = model.diffusion.q_sample(x0, steps, eps)
-        with torch.no_grad():
-            x0_hat = model.diffusion.to_x0(model.denoiser(x_t, steps, cond=None, mask=mask, drop_cond=drop), x_t, steps)
-        eps_hat = model.diffusion.eps_from_x0(x0_hat, x_t, steps)
-        rms = [float((a - b).pow(2).mean().sqrt()) for a, b in ((eps_hat, eps), (x0_hat, x0))]
-        rows.append(f"| {model.hparams.diffusion['prediction']} | {t} | {rms[0]:.3f} | {rms[1]:.3g} |")
+    rows = []
+    for t, rms_x0, rms_eps in errors(model, x0, (999, 980, 900, 500, 100, 10)):
+        rows.append(f"| {model.hparams.diffusion['prediction']} | {t} | {rms_eps:.3f} | {rms_x0:.3g} |")
     return rows
 
 
