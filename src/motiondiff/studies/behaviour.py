@@ -57,7 +57,8 @@ def net_speed(joints: np.ndarray, fps: float) -> float:
 
 
 def speed_table(pipe: MotionPipeline, data_root, n: int, seed: int, **sampling) -> list[dict]:
-    """Median net speed of n samples per speed prompt and length, and of the real train clips of its label."""
+    """Median net speed of n samples per speed prompt and length, and of the real train clips of its label. An
+    action-conditioned model is asked with the label instead of the text, as in `report`."""
 
     train = load_split(data_root, "train")
     rows = []
@@ -68,10 +69,11 @@ def speed_table(pipe: MotionPipeline, data_root, n: int, seed: int, **sampling) 
         for seconds in SPEED_SECONDS:
             if seconds > pipe.max_seconds:
                 continue
-            joints, _ = generate(pipe, prompt, seconds, n, seed, **sampling)
+            ask = label if pipe.condition_kind == "action" else prompt
+            joints, _ = generate(pipe, ask, seconds, n, seed, **sampling)
             speed = float(np.median([net_speed(j, pipe.fps) for j in joints]))
             ratio = speed / real_median if real else float("nan")
-            rows.append({"prompt": prompt, "label": label, "seconds": seconds, "speed": speed, "real": real_median,
+            rows.append({"prompt": ask, "label": label, "seconds": seconds, "speed": speed, "real": real_median,
                          "ratio": ratio, "holds": bool(abs(ratio - 1) <= SPEED_TOLERANCE)})  # fmt: skip
     return rows
 
@@ -291,7 +293,7 @@ def main(argv: list[str]) -> None:
     rows = report(module, data_root, cfg.num_samples, cfg.seed, evaluators, **sampling)
     print_report(rows)
     speeds = speed_table(MotionPipeline(module), data_root, cfg.num_samples, cfg.seed, **sampling) if (
-        module.condition_kind == "text") else []  # fmt: skip
+        module.condition_kind in ("text", "action")) else []  # fmt: skip
     out = Path(cfg.out or outputs / "behaviour" / time.strftime("%Y-%m-%d_%H-%M-%S"))
     out.mkdir(parents=True, exist_ok=True)
     speed_text = speed_markdown(speeds) if speeds else ""

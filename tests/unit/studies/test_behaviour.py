@@ -96,7 +96,8 @@ def test_the_speed_table_measures_each_length_against_the_real_clips():
     from motiondiff.studies.behaviour import SPEED_PROMPTS, speed_table
 
     torch.manual_seed(0)
-    pipe = MotionPipeline(load_release(SHIPPED_MODELS["text"]))
-    rows = speed_table(pipe, embedded_data_root(), n=2, seed=0, sampler="ddim", steps=2)
-    assert [(r["label"], r["seconds"]) for r in rows] == [(label, s) for _, label in SPEED_PROMPTS for s in (2, 4, 6)]
-    assert all(r["real"] > 0.5 and r["ratio"] == pytest.approx(r["speed"] / r["real"]) for r in rows)
+    for kind in ("text", "action"):  # an action model is asked with the label (the text is no action name)
+        pipe = MotionPipeline(load_release(SHIPPED_MODELS[kind]))
+        rows = speed_table(pipe, embedded_data_root(), n=2, seed=0, sampler="ddim", steps=2)
+        assert [(r["label"], r["seconds"]) for r in rows] == [(lb, s) for _, lb in SPEED_PROMPTS for s in (2, 4, 6)]
+        assert all(r["real"] > 0.5 and r["ratio"] == pytest.approx(r["speed"] / r["real"]) for r in rows)
