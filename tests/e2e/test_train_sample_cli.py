@@ -215,7 +215,7 @@ def test_shipped_action_model_samples_an_action_by_name(tmp_path):
             "sampler.steps=3", "export=none", env_dir=tmp_path)  # fmt: skip
     out = next((tmp_path / "outputs" / "sample").iterdir())
     summary = json.loads((out / "results.json").read_text())
-    assert summary["checkpoint"].endswith("bandai_action_cpu.safetensors")
+    assert summary["checkpoint"].endswith("bandai_action_trans_dec_14k.safetensors")
     assert len(summary["samples"]) == 2 and np.load(summary["samples"][0]["joints"]).shape[1:] == (22, 3)
     proc = run_cli("sample.py", "checkpoint=shipped", "action=moonwalk", "export=none", env_dir=tmp_path, check=False)
     assert proc.returncode == 2 and "unknown action 'moonwalk'" in proc.stderr and "wave-right-hand" in proc.stderr

@@ -28,6 +28,7 @@ SHIPPED = [
     "bandai_text_long_42k",
     "bandai_text_trans_dec_40k",
     "bandai_action_cpu",
+    "bandai_action_trans_dec_14k",
 ]
 
 

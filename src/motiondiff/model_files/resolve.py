@@ -21,7 +21,7 @@ RELEASE_SUFFIXES = (".safetensors", ".json")
 # checkpoint=shipped: the models released with the repo (safetensors + JSON, see checkpoints/models), by condition
 SHIPPED_MODELS = {
     "text": MODELS_DIR / "bandai_text_trans_dec_40k.safetensors",  # docs/results/shipping/rules.md (2026-12-07)
-    "action": MODELS_DIR / "bandai_action_cpu.safetensors",
+    "action": MODELS_DIR / "bandai_action_trans_dec_14k.safetensors",  # rule W, docs/results/bandai_action (2026-12-07)
     "guidedmotion": MODELS_DIR / "bandai_guided_cpu.safetensors",  # with its three VAEs; docs/results/guidedmotion
 }
 RUN_NAMES = ("latest", "best")
