@@ -58,18 +58,21 @@ def net_speed(joints: np.ndarray, fps: float) -> float:
 
 def speed_table(pipe: MotionPipeline, data_root, n: int, seed: int, **sampling) -> list[dict]:
     """Median net speed of n samples per speed prompt and length, and of the real train clips of its label. An
-    action-conditioned model is asked with the label instead of the text, as in `report`."""
+    action-conditioned model is asked with the label instead of the text (labels it lacks are left out), as in
+    `report`."""
 
     train = load_split(data_root, "train")
     rows = []
-    for prompt, label in tqdm(SPEED_PROMPTS, desc="speed by length", unit="prompt"):
+    action = pipe.condition_kind == "action"
+    prompts = [(p, label) for p, label in SPEED_PROMPTS if not action or label in pipe.actions]
+    for prompt, label in tqdm(prompts, desc="speed by length", unit="prompt"):
         real = [net_speed(train.arrays["joints"][train.clip_slice(i)], pipe.fps) for i in range(train.num_clips)
                 if train.label("content", i) == label]  # fmt: skip
         real_median = float(np.median(real)) if real else float("nan")
         for seconds in SPEED_SECONDS:
             if seconds > pipe.max_seconds:
                 continue
-            ask = label if pipe.condition_kind == "action" else prompt
+            ask = label if action else prompt
             joints, _ = generate(pipe, ask, seconds, n, seed, **sampling)
             speed = float(np.median([net_speed(j, pipe.fps) for j in joints]))
             ratio = speed / real_median if real else float("nan")
