@@ -63,8 +63,9 @@ def speed_table(pipe: MotionPipeline, data_root, n: int, seed: int, **sampling) 
 
     train = load_split(data_root, "train")
     rows = []
-    action = pipe.condition_kind == "action"
-    prompts = [(p, label) for p, label in SPEED_PROMPTS if not action or label in pipe.actions]
+    prompts = SPEED_PROMPTS
+    if pipe.condition_kind == "action":
+        prompts = tuple((label, label) for _, label in prompts if label in pipe.actions)
     for prompt, label in tqdm(prompts, desc="speed by length", unit="prompt"):
         real = [net_speed(train.arrays["joints"][train.clip_slice(i)], pipe.fps) for i in range(train.num_clips)
                 if train.label("content", i) == label]  # fmt: skip
@@ -72,11 +73,10 @@ def speed_table(pipe: MotionPipeline, data_root, n: int, seed: int, **sampling) 
         for seconds in SPEED_SECONDS:
             if seconds > pipe.max_seconds:
                 continue
-            ask = label if action else prompt
-            joints, _ = generate(pipe, ask, seconds, n, seed, **sampling)
+            joints, _ = generate(pipe, prompt, seconds, n, seed, **sampling)
             speed = float(np.median([net_speed(j, pipe.fps) for j in joints]))
             ratio = speed / real_median if real else float("nan")
-            rows.append({"prompt": ask, "label": label, "seconds": seconds, "speed": speed, "real": real_median,
+            rows.append({"prompt": prompt, "label": label, "seconds": seconds, "speed": speed, "real": real_median,
                          "ratio": ratio, "holds": bool(abs(ratio - 1) <= SPEED_TOLERANCE)})  # fmt: skip
     return rows
 
