@@ -5,8 +5,9 @@ with the split's real clips, so both sides are small samples (276/277) and the F
 generator that draws from the true distribution. This script measures that bias with real motion only: for each
 clip of the split it draws a random real train clip of the same action (the generator conditioned on the label,
 made perfect), embeds it with the released action classifier as the evaluation of the shipped action model does
-(clips cropped to its MAX_FRAMES, cut to the unit length), and scores FID against the split's real clips. Repeated over REPS draws: mean and 95 % interval.
-Nothing here is chosen or trained; the test clips are read only as the evaluation's reference.
+(clips cropped to its MAX_FRAMES, cut to the unit length), and scores FID against the split's real clips. Repeated
+over REPS draws: mean ± 95 % interval as the evaluation tables give it (`eval.report.mean_ci`). Nothing here is
+chosen or trained; the test clips are read only as the evaluation's reference.
 
     .venv/bin/python docs/results/bandai_action/fid_floor/fid_floor.py > docs/results/bandai_action/fid_floor/README.md
 """
@@ -18,6 +19,7 @@ import numpy as np
 import motiondiff.metrics as M
 from motiondiff.data.datamodules import PreparedDataModule
 from motiondiff.eval.protocol import EvalClips, Evaluators
+from motiondiff.eval.report import mean_ci
 from motiondiff.runtime.hardware import cpu_model
 
 REPS = 20
@@ -33,7 +35,7 @@ def main() -> None:
     train_emb = evaluators.embed_motion(train.features)[key]
     by_action = {a: np.flatnonzero(train.actions == a) for a in np.unique(train.actions)}
     print(f"`{' '.join(sys.argv)}` ({cpu_model()}): the released action classifier's "
-          f"features, {REPS} draws, mean ± 95 % CI (t, {REPS - 1} d.o.f.).\n")  # fmt: skip
+          f"features, {REPS} draws, mean ± 95 % CI as in the evaluation tables.\n")  # fmt: skip
     print("| split | clips | real split vs real train (the table's Real row) | perfect generator: same-action train "
           "clips vs the split's real clips | ratio |")  # fmt: skip
     print("|---|---:|---:|---:|---:|")
@@ -45,7 +47,7 @@ def main() -> None:
         for _ in range(REPS):
             drawn = np.array([rng.choice(by_action[a]) for a in clips.actions])
             fids.append(M.frechet_distance(*M.gaussian_statistics(real), *M.gaussian_statistics(train_emb[drawn])))
-        mean, half = float(np.mean(fids)), 2.093 * float(np.std(fids, ddof=1)) / np.sqrt(REPS)
+        mean, half = mean_ci(fids)
         print(f"| {split} | {len(clips)} | {real_row:.3f} | {mean:.3f} ± {half:.3f} | {mean / real_row:.2f} |")
 
 
