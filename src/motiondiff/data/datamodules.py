@@ -57,6 +57,7 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         seed: int = 0,
         balance: float = 0.0,
         window_min_frames: int | None = None,
+        first_window_share: float = 0.0,
         bucketing: bool = False,
         bucket_chunk: int = 64,
         mirror: bool = False,
@@ -66,6 +67,7 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
         self._mirror_stats: tuple[np.ndarray, np.ndarray] | None = None
         self.bucketing, self.bucket_chunk = bool(bucketing), int(bucket_chunk)
         self.window_min_frames = window_min_frames  # random training-window lengths: MotionDataset
+        self.first_window_share = float(first_window_share)  # share of windows that are the clip's first: ditto
         self.balance = float(balance)  # class-balanced training order: resumable.balance_weights
         self.batch_size = batch_size
         self.num_workers = num_workers
@@ -154,6 +156,7 @@ class MotionDataModule(L.LightningDataModule, abc.ABC):
                 train=split == "train",
                 seed=self.seed,
                 window_min_frames=self.window_min_frames,
+                first_window_share=self.first_window_share,
             )
         return self.datasets[split]
 

@@ -38,6 +38,9 @@ class MotionDataset(Dataset):
     min(length, max_frames)]. Without it every clip longer than `max_frames` is seen at exactly `max_frames`, so
     where long clips are of other actions than short ones (Bandai: walks 130-210 frames, runs 50-100) the model
     learns the length as a cue for the action, and a 4 s walk comes out as a run.
+    `first_window_share` (train only, with `window_min_frames`): that share of the windows is the clip's first
+    min(length, max_frames) frames, the window the evaluation and a user's request of that length see (a motion
+    from its start); the rest are random as above.
     Lengths are rounded down to a multiple of `unit_length` (the official HumanML3D loader uses 4).
     """
 
@@ -51,6 +54,7 @@ class MotionDataset(Dataset):
         train: bool = True,
         seed: int = 0,
         window_min_frames: int | None = None,
+        first_window_share: float = 0.0,
     ):
         if not records:
             raise ValueError("MotionDataset got no clips: check the split file and the length limits")
@@ -65,6 +69,9 @@ class MotionDataset(Dataset):
         if window_min_frames is not None and window_min_frames < 1:
             raise ValueError(f"window_min_frames must be a positive number of frames or null, got {window_min_frames}")
         self.window_min_frames = window_min_frames
+        if not 0.0 <= first_window_share <= 1.0:
+            raise ValueError(f"first_window_share must be a share in [0, 1], got {first_window_share}")
+        self.first_window_share = float(first_window_share)
         self.train = train
         self.seed = int(seed or 0)
         self.rng = np.random.default_rng(seed)
@@ -91,19 +98,24 @@ class MotionDataset(Dataset):
     def _item_rng(self, epoch: int, index: int) -> np.random.Generator:
         return np.random.default_rng((self.seed, int(epoch), int(index)))
 
-    def _window_length(self, rec: MotionRecord, rng: np.random.Generator) -> int:
+    def _window(self, rec: MotionRecord, rng: np.random.Generator) -> tuple[int, bool]:
+        """(frames, whether the window is the clip's first): the first draws of ``rng``, so `item_lengths` can
+        repeat them. No draw is added where `first_window_share` is 0, so earlier runs resume unchanged."""
         n = min(rec.length, self.max_frames)
+        first = not self.train
         if self.train and self.window_min_frames is not None:
-            n = int(rng.integers(min(n, self.window_min_frames), n + 1))
-        return max(self.unit_length, n - n % self.unit_length)
+            first = self.first_window_share > 0 and rng.random() < self.first_window_share
+            if not first:
+                n = int(rng.integers(min(n, self.window_min_frames), n + 1))
+        return max(self.unit_length, n - n % self.unit_length), first
 
     def item_lengths(self, epoch: int) -> np.ndarray:
         """Frames of every item of ``epoch``: the ``length`` that ``self[(epoch, i)]`` returns, without building the
         items (a length-bucketing sampler groups by it). Fixed unless training windows have random lengths."""
         if self.train and self.window_min_frames is not None:
-            lengths = [self._window_length(r, self._item_rng(epoch, i)) for i, r in enumerate(self.records)]
+            lengths = [self._window(r, self._item_rng(epoch, i))[0] for i, r in enumerate(self.records)]
         else:  # no draw: self.rng is not touched
-            lengths = [self._window_length(r, self.rng) for r in self.records]
+            lengths = [self._window(r, self.rng)[0] for r in self.records]
         return np.asarray(lengths, dtype=np.int64)
 
     def __getitem__(self, key: int | tuple[int, int]) -> dict:
@@ -115,9 +127,9 @@ class MotionDataset(Dataset):
         else:
             index, rng = key, self.rng
         rec = self.records[index]
-        n = self._window_length(rec, rng)  # the first draw of rng, so `item_lengths` can repeat it
+        n, first = self._window(rec, rng)  # the first draws of rng, so `item_lengths` can repeat them
         start = 0
-        if self.train and rec.length > n:
+        if self.train and not first and rec.length > n:
             start = int(rng.integers(0, rec.length - n + 1))
         motion = self.normalise(rec.motion[start : start + n])
         if rec.texts:
