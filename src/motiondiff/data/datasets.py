@@ -38,9 +38,9 @@ class MotionDataset(Dataset):
     min(length, max_frames)]. Without it every clip longer than `max_frames` is seen at exactly `max_frames`, so
     where long clips are of other actions than short ones (Bandai: walks 130-210 frames, runs 50-100) the model
     learns the length as a cue for the action, and a 4 s walk comes out as a run.
-    `first_window_share` (train only, with `window_min_frames`): that share of the windows is the clip's first
-    min(length, max_frames) frames, the window the evaluation and a user's request of that length see (a motion
-    from its start); the rest are random as above.
+    `first_window_share` (train only): that share of the windows is the clip's first min(length, max_frames)
+    frames, the window the evaluation and a user's request of that length see (a motion from its start); the rest
+    are random as above.
     Lengths are rounded down to a multiple of `unit_length` (the official HumanML3D loader uses 4).
     """
 
@@ -102,17 +102,15 @@ class MotionDataset(Dataset):
         """(frames, whether the window is the clip's first): the first draws of ``rng``, so `item_lengths` can
         repeat them. No draw is added where `first_window_share` is 0, so earlier runs resume unchanged."""
         n = min(rec.length, self.max_frames)
-        first = not self.train
-        if self.train and self.window_min_frames is not None:
-            first = self.first_window_share > 0 and rng.random() < self.first_window_share
-            if not first:
-                n = int(rng.integers(min(n, self.window_min_frames), n + 1))
+        first = not self.train or (self.first_window_share > 0 and rng.random() < self.first_window_share)
+        if self.train and not first and self.window_min_frames is not None:
+            n = int(rng.integers(min(n, self.window_min_frames), n + 1))
         return max(self.unit_length, n - n % self.unit_length), first
 
     def item_lengths(self, epoch: int) -> np.ndarray:
         """Frames of every item of ``epoch``: the ``length`` that ``self[(epoch, i)]`` returns, without building the
         items (a length-bucketing sampler groups by it). Fixed unless training windows have random lengths."""
-        if self.train and self.window_min_frames is not None:
+        if self.train and (self.window_min_frames is not None or self.first_window_share > 0):
             lengths = [self._window(r, self._item_rng(epoch, i))[0] for i, r in enumerate(self.records)]
         else:  # no draw: self.rng is not touched
             lengths = [self._window(r, self.rng)[0] for r in self.records]

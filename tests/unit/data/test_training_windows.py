@@ -66,6 +66,13 @@ def test_a_zero_share_draws_what_earlier_runs_drew():
         assert (ds[(e, 0)]["length"], ds[(e, 0)]["start"]) == (n, int(rng.integers(0, 150 - n + 1)))
 
 
+def test_without_random_lengths_the_share_still_starts_windows_at_the_first_frame():
+    ds = MotionDataset(_records([150]), np.zeros(4), np.ones(4), max_frames=120, train=True, seed=1,
+                       first_window_share=1.0)  # fmt: skip
+    assert {(ds[(e, 0)]["length"], ds[(e, 0)]["start"]) for e in range(30)} == {(120, 0)}
+    np.testing.assert_array_equal(ds.item_lengths(3), [120])
+
+
 @pytest.mark.parametrize("share", [-0.1, 1.5])
 def test_a_share_outside_0_1_is_refused(share):
     with pytest.raises(ValueError, match="first_window_share"):

@@ -106,7 +106,8 @@ def main() -> None:
         )
     )
 
-    cache = Path("outputs/fid_gap") / (Path(ckpt).stem + ".npz")  # the generated embeddings, reused on a rerun
+    # the generated embeddings, reused on a rerun of the same file (named by its whole path: runs share last.ckpt)
+    cache = Path("outputs/fid_gap") / (str(Path(ckpt).with_suffix("")).strip("/").replace("/", "__") + ".npz")
     start, gens, preds = time.perf_counter(), [], []
     if cache.exists():
         saved = np.load(cache)
