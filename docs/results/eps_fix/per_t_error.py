@@ -28,23 +28,35 @@ def label(path: str) -> str:
     return f"{parts[-3]} {name}" if len(parts) >= 3 and parts[-2] == "checkpoints" else name
 
 
-def main() -> None:
-    dm = PreparedDataModule("data/bandai", batch_size=8, max_frames=FRAMES)
+def val_clips(representation: str | None) -> torch.Tensor:
+    """The first CLIPS val clips of at least FRAMES frames, normalised, in a model's feature layout (hml263 when the
+    model names none): the same clips for every layout, so models of different representations are compared on
+    one motion."""
+    extra = {"representation": representation} if representation else {}
+    dm = PreparedDataModule("data/bandai", batch_size=8, max_frames=FRAMES, **extra)
     dm.setup("fit")
     val = dm.dataset("val")
     items = (val[i] for i in range(len(val)))
     clips = [it["motion"][:FRAMES] for it in items if len(it["motion"]) >= FRAMES][:CLIPS]
-    x0 = torch.stack([torch.as_tensor(c) for c in clips]).float()
+    return torch.stack([torch.as_tensor(c) for c in clips]).float()
+
+
+def main() -> None:
     models = [(path, load_model(path)) for path in sys.argv[1:]]
+    layouts = [(m.hparams.get("representation") or {}).get("name") for _, m in models]
     snr = models[0][1].diffusion.snr
     print(
-        f"`{' '.join(sys.argv)}`: {len(clips)} real val clips of the full Bandai set, {FRAMES} frames, normalised "
-        f"features, {NOISES} noise draws each, the unconditioned branch (seed 0).\n"
+        f"`{' '.join(sys.argv)}`: {CLIPS} real val clips of the full Bandai set, {FRAMES} frames, normalised "
+        f"features (each model's own: {', '.join(x or 'hml263' for x in layouts)}), {NOISES} noise draws each, "
+        f"the unconditioned branch (seed 0).\n"
     )
     head = " | ".join(f"{label(p)}: RMS x̂0 − x0 | RMS ε̂ − ε" for p, _ in models)
     print(f"| t | SNR(t): the ε loss's weight on x̂0's error (x0 loss: 1) | {head} |")
     print("|---:|---:|" + "---:|---:|" * len(models))
-    table = [prediction_errors(m, x0, T_VALUES, NOISES) for _, m in models]
+    table = [
+        prediction_errors(m, val_clips(layout), T_VALUES, NOISES)
+        for (_, m), layout in zip(models, layouts, strict=True)
+    ]
     for i, t in enumerate(T_VALUES):
         cells = " | ".join(f"{rows[i][1]:.3g} | {rows[i][2]:.3g}" for rows in table)
         print(f"| {t} | {float(snr[t]):.3g} | {cells} |")
