@@ -44,9 +44,10 @@ def val_clips(representation: str | None) -> torch.Tensor:
 def main() -> None:
     models = [(path, load_model(path)) for path in sys.argv[1:]]
     layouts = [(m.hparams.get("representation") or {}).get("name") for _, m in models]
+    clips = {layout: val_clips(layout) for layout in dict.fromkeys(layouts)}  # one load per feature layout
     snr = models[0][1].diffusion.snr
     print(
-        f"`{' '.join(sys.argv)}`: {CLIPS} real val clips of the full Bandai set, {FRAMES} frames, normalised "
+        f"`{' '.join(sys.argv)}`: {len(next(iter(clips.values())))} real val clips of the full Bandai set, {FRAMES} frames, normalised "
         f"features (each model's own: {', '.join(x or 'hml263' for x in layouts)}), {NOISES} noise draws each, "
         f"the unconditioned branch (seed 0).\n"
     )
@@ -54,8 +55,7 @@ def main() -> None:
     print(f"| t | SNR(t): the ε loss's weight on x̂0's error (x0 loss: 1) | {head} |")
     print("|---:|---:|" + "---:|---:|" * len(models))
     table = [
-        prediction_errors(m, val_clips(layout), T_VALUES, NOISES)
-        for (_, m), layout in zip(models, layouts, strict=True)
+        prediction_errors(m, clips[layout], T_VALUES, NOISES) for (_, m), layout in zip(models, layouts, strict=True)
     ]
     for i, t in enumerate(T_VALUES):
         cells = " | ".join(f"{rows[i][1]:.3g} | {rows[i][2]:.3g}" for rows in table)

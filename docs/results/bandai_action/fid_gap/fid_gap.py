@@ -36,10 +36,9 @@ def fid(a: np.ndarray, b: np.ndarray) -> float:
     return M.frechet_distance(*M.gaussian_statistics(a), *M.gaussian_statistics(b))
 
 
-def terms(real: np.ndarray, gen: np.ndarray) -> tuple[float, float]:
-    """(squared mean distance, covariance term) of the Fréchet distance."""
-    mean = float(((real.mean(0) - gen.mean(0)) ** 2).sum())
-    return mean, fid(real, gen) - mean
+def mean_term(real: np.ndarray, gen: np.ndarray) -> float:
+    """The Fréchet distance's squared distance of the means (the rest of it is the covariance term)."""
+    return float(((real.mean(0) - gen.mean(0)) ** 2).sum())
 
 
 def perfect_draws(evaluators, key, records, actions, lengths, rng, max_frames, anywhere=False) -> list[np.ndarray]:
@@ -130,13 +129,13 @@ def main() -> None:
           f"same-action train clips. {cpu_model()}, {minutes:.1f} min of generation"
           f"{f' ({reused} replication(s) read back from {cache})' if reused else ''}.\n")  # fmt: skip
     total = [fid(real, g) for g in gens]
-    mean_t = [terms(real, g) for g in gens]
+    means = np.mean([mean_term(real, g) for g in gens])
     gap = np.mean(total) - floor
     print(f"FID {np.mean(total):.3f} (replications {', '.join(f'{t:.3f}' for t in total)}); a perfect generator "
-          f"(every row repaired: a same-action train clip within {TOLERANCE} frames of its length) {floor:.3f} (with whole train clips, as ../fid_floor/ draws them: "
-          f"{unmatched:.3f}; with windows at a random start, as training draws them: {anywhere:.3f}); "
-          f"the gap {gap:.3f}. Squared mean distance "
-          f"{np.mean([t[0] for t in mean_t]):.3f}, covariance term {np.mean([t[1] for t in mean_t]):.3f}.\n")  # fmt: skip
+          f"(every row repaired: a same-action train clip within {TOLERANCE} frames of its length) {floor:.3f} "
+          f"(with whole train clips, as ../fid_floor/ draws them: {unmatched:.3f}; with windows at a random start, "
+          f"as training draws them: {anywhere:.3f}); the gap {gap:.3f}. Squared mean distance {means:.3f}, "
+          f"covariance term {np.mean(total) - means:.3f}.\n")  # fmt: skip
 
     print("| action | val clips | train clips | accuracy | FID with this action repaired | share of the gap |")
     print("|---|---:|---:|---:|---:|---:|")

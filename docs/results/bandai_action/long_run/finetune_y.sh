@@ -7,18 +7,17 @@
 set -euo pipefail
 cd "$(dirname "$0")/../../../.."; source .venv/bin/activate; source docs/results/sittings.sh; use_tcmalloc
 here=docs/results/bandai_action/long_run
-for cand in "${@:-y1:0.5 y0:0}"; do
-  for c in $cand; do
-    name=${c%%:*}; share=${c#*:}; run=outputs/train/bandai_action_$name
-    if [ ! -f "$run/done" ]; then
-      ck=$(resume_arg "$run"); log_sitting "$here/sittings_$name.log" "${ck:-init_from=checkpoints/models/bandai_action_trans_dec_14k.safetensors}"
-      python train.py experiment=bandai_action_trans_dec \
-        init_from=checkpoints/models/bandai_action_trans_dec_14k.safetensors optim.lr=1e-4 optim.warmup_steps=100 \
-        trainer.max_steps=4000 dataset.datamodule.first_window_share="$share" logger=csv hydra.run.dir="$run" $ck
-      echo "$(date -u +%FT%TZ) sitting ends (exit $?)" >> "$here/sittings_$name.log"; touch "$run/done"
-    fi
-    "$here/candidate.sh" "$run/checkpoints/last.ckpt" "$name"
-    python docs/results/bandai_action/fid_gap/fid_gap.py "$run/checkpoints/last.ckpt" \
-      > "docs/results/bandai_action/fid_gap/$name.md"
-  done
+[ $# -gt 0 ] || set -- y1:0.5 y0:0
+for c in "$@"; do
+  name=${c%%:*}; share=${c#*:}; run=outputs/train/bandai_action_$name
+  if [ ! -f "$run/done" ]; then
+    ck=$(resume_arg "$run"); log_sitting "$here/sittings_$name.log" "${ck:-init_from=checkpoints/models/bandai_action_trans_dec_14k.safetensors}"
+    python train.py experiment=bandai_action_trans_dec \
+      init_from=checkpoints/models/bandai_action_trans_dec_14k.safetensors optim.lr=1e-4 optim.warmup_steps=100 \
+      trainer.max_steps=4000 dataset.datamodule.first_window_share="$share" logger=csv hydra.run.dir="$run" $ck
+    echo "$(date -u +%FT%TZ) sitting ends (exit $?)" >> "$here/sittings_$name.log"; touch "$run/done"
+  fi
+  "$here/candidate.sh" "$run/checkpoints/last.ckpt" "$name"
+  python docs/results/bandai_action/fid_gap/fid_gap.py "$run/checkpoints/last.ckpt" \
+    > "docs/results/bandai_action/fid_gap/$name.md"
 done
