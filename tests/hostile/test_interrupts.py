@@ -3,6 +3,7 @@ no folder left; a second run aimed at a folder another live run is writing is re
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import time
@@ -11,7 +12,7 @@ import pytest
 from hostile_cli import assert_refused, files_under, popen_cli, run_in_process
 from kill_runs import BANDAI, PREPARE
 
-from motiondiff.runtime.boundary import Stopped, _signal_behind, guarded
+from motiondiff.runtime.boundary import Stopped, guarded, signal_behind, stop_on_sigterm
 
 PROMPTS = "".join(f"a person walks forward then turns {k} times\n" for k in range(20))
 
@@ -148,4 +149,34 @@ def test_a_signal_that_an_import_turned_into_an_import_error_is_still_the_signal
     with pytest.raises(SystemExit) as exit_:
         guarded(first_import)()
     assert exit_.value.code == code and capsys.readouterr().err.strip() == line
-    assert _signal_behind(ImportError("initialization failed")) is None  # one of its own is no signal
+    assert signal_behind(ImportError("initialization failed")) is None  # one of its own is no signal
+
+
+@pytest.mark.parametrize(("signum", "code", "line"), [(signal.SIGTERM, 143, "error: stopped by SIGTERM"),
+                                                     (signal.SIGINT, 130, "error: interrupted (Ctrl-C)")])  # fmt: skip
+def test_a_signal_that_c_code_dropped_for_another_error_is_still_the_signal(capsys, signum, code, line):
+    # CI met it: SIGTERM while matplotlib's Agg renderer drew a video frame came out as ValueError('Invalid bounding
+    # box'), with no link to the signal, and the command showed a traceback instead of its one line
+    def drawing():
+        try:
+            os.kill(os.getpid(), signum)
+            time.sleep(5)  # the handler raises here
+        except BaseException:  # noqa: BLE001 - what the C code does with it
+            pass
+        raise ValueError("Invalid bounding box")
+
+    previous = signal.getsignal(signal.SIGTERM), signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        stop_on_sigterm(kept="")
+        with pytest.raises(SystemExit) as exit_:
+            guarded(drawing)()
+    finally:
+        signal.signal(signal.SIGTERM, previous[0])
+        signal.signal(signal.SIGINT, previous[1])
+    assert exit_.value.code == code and capsys.readouterr().err.strip() == line
+    with pytest.raises(ValueError, match="bounding box"):  # reported once: the next error is an error again
+        guarded(_plain_error)()
+
+
+def _plain_error():
+    raise ValueError("Invalid bounding box")

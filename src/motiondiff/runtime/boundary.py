@@ -65,8 +65,8 @@ def guarded(fn):
         except (Stopped, KeyboardInterrupt) as stop:  # reported here, after the run folder and any bar are closed
             _exit_stopped(stop)
         except Exception as err:  # noqa: BLE001 - sorted into expected (one line) and bugs (re-raised)
-            stop = _signal_behind(err)
-            if stop is not None:  # a C extension's import that the signal interrupted re-raised it as ImportError
+            stop = signal_behind(err)
+            if stop is not None:  # a signal that C code turned into another error (an import, a drawing)
                 _exit_stopped(stop)
             line = error_line(err)
             if line is None:
@@ -79,6 +79,7 @@ def guarded(fn):
 
 def _exit_stopped(stop: BaseException):
     """SIGTERM's line and exit 143, or Ctrl-C's and exit 130."""
+    _RECEIVED.clear()  # reported: a later command in this process starts with none
     if isinstance(stop, Stopped):
         print(f"error: {stop.line}", file=sys.stderr)
         sys.exit(SIGTERM_EXIT)
@@ -86,17 +87,23 @@ def _exit_stopped(stop: BaseException):
     sys.exit(130)
 
 
-def _signal_behind(err: BaseException) -> BaseException | None:
-    """The SIGTERM (`Stopped`) or Ctrl-C that ``err`` was raised from or while handling, if any: pybind11 turns an
-    exception raised inside a module's initialisation (a signal arriving during a first `import`) into
-    ``ImportError('initialization failed')`` raised from it."""
+def signal_behind(err: BaseException) -> BaseException | None:
+    """The SIGTERM (`Stopped`) or Ctrl-C that ``err`` was raised from or while handling, or that arrived before it,
+    if any. A signal's exception raised inside C code can come out as another error: pybind11 turns one raised in a
+    module's initialisation (a first `import`) into ``ImportError('initialization failed')`` raised from it, and
+    matplotlib's Agg renderer, interrupted while it draws a path, drops it and raises ``ValueError('Invalid bounding
+    box')`` with no link to it; the handlers `stop_on_sigterm` installs note each signal, so both are the stop."""
     seen = set()
     while err is not None and id(err) not in seen:
         seen.add(id(err))
         if isinstance(err, Stopped | KeyboardInterrupt):
             return err
         err = err.__cause__ or err.__context__
-    return None
+    return _RECEIVED[-1] if _RECEIVED else None
+
+
+# The stop signals that arrived since this command installed its handlers (`stop_on_sigterm`), newest last.
+_RECEIVED: list[BaseException] = []
 
 
 SIGTERM_EXIT = 143  # 128 + SIGTERM, as a shell reports a process the signal ended
@@ -120,10 +127,18 @@ def stop_on_sigterm(out: Path | None = None, kept: str | None = None):
     it (a command called in-process)."""
     if threading.current_thread() is not threading.main_thread():
         return None
+    _RECEIVED.clear()
 
     def stop(signum, frame):
-        raise Stopped(f"stopped by SIGTERM{_resume_hint(out) if kept is None else kept}")
+        _RECEIVED.append(Stopped(f"stopped by SIGTERM{_resume_hint(out) if kept is None else kept}"))
+        raise _RECEIVED[-1]
 
+    def interrupt(signum, frame):
+        _RECEIVED.append(KeyboardInterrupt())
+        raise _RECEIVED[-1]
+
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # an ignored Ctrl-C (nohup) stays ignored
+        signal.signal(signal.SIGINT, interrupt)  # Python's own KeyboardInterrupt, noted
     return signal.signal(signal.SIGTERM, stop)
 
 

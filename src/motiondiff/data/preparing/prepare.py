@@ -32,7 +32,7 @@ from motiondiff.data.preparing.writer import (  # noqa: F401  (PrepareError, che
     process_and_write,
 )
 from motiondiff.data.sources import bandai
-from motiondiff.runtime.boundary import SIGTERM_EXIT, Stopped, error_line, stop_on_sigterm
+from motiondiff.runtime.boundary import SIGTERM_EXIT, Stopped, error_line, signal_behind, stop_on_sigterm
 
 
 def prepare_bandai(
@@ -178,6 +178,13 @@ def _prepare(args) -> int:
         print(f"error: {stop.line}", file=sys.stderr)
         return SIGTERM_EXIT
     except Exception as err:  # noqa: BLE001 - expected failures (disk, permissions, text) as one line; bugs re-raised
+        stop = signal_behind(err)
+        if stop is not None:  # a signal that C code turned into another error
+            print(
+                f"error: {stop.line}" if isinstance(stop, Stopped) else f"error: interrupted (Ctrl-C); {UNCHANGED}",
+                file=sys.stderr,
+            )
+            return SIGTERM_EXIT if isinstance(stop, Stopped) else 130
         line = error_line(err)
         if line is None:
             raise
