@@ -1,4 +1,4 @@
-# Sourced by the scripts that train in sittings (final_run.sh, bandai_action/long_run/run.sh, ablation_full/cell.sh,
+# Sourced by the scripts that train in sittings (final_run.sh, bandai_action/*/run.sh, ablation_full/cell.sh,
 # eps_fix/ and geometric_reduction/run_all.sh,
 # guidedmotion/mirror_release/run.sh): tcmalloc where it is installed, where a sitting resumes from, and its log line.
 
@@ -27,6 +27,20 @@ log_sitting() {
   torch_side=$(python -c 'import torch; from motiondiff.runtime.hardware import fast_cpu_precision as p
 print(f"{torch.get_num_threads()} torch threads, {p()}")')
   echo "$(date -u +%FT%TZ) sitting starts ($cpu, $(nproc --all) cores, $torch_side, ${2:-from scratch})" >> "$1"
+}
+
+# train_sitting EXPERIMENT RUN SITTING LOG [key=value ...]: one sitting of `train.py experiment=EXPERIMENT key=value...`
+# in the run folder RUN, resumed from its last.ckpt (or from the committed sitting checkpoint SITTING, "" for none, on
+# a machine without the folder), with the sitting's start and end lines in LOG.
+train_sitting() {
+  local experiment=$1 run=$2 sitting=$3 log=$4 ck; shift 4
+  ck=$(resume_arg "$run" "$sitting")
+  mkdir -p "$(dirname "$run")"
+  log_sitting "$log" "$ck"
+  python train.py experiment="$experiment" "$@" hydra.run.dir="$run" $ck
+  local code=$?
+  echo "$(date -u +%FT%TZ) sitting ends (exit $code)" >> "$log"
+  return $code
 }
 
 # until_written FILE: wait until FILE has stopped growing (a checkpoint being saved is complete).

@@ -4,9 +4,5 @@
 # pid> after the checkpoint that follows the in-training evaluation at step 2,000. Needs data/bandai (make data-full).
 cd "$(dirname "$0")/../../.."; source .venv/bin/activate; source docs/results/sittings.sh; use_tcmalloc
 RUN=outputs/eps_fix/t1
-ck=$(resume_arg $RUN "")
-mkdir -p outputs/eps_fix
-log_sitting $RUN.sittings.log "$ck"
-python train.py experiment=ablation_full ablation=eps_hml263 condition=action loss=geometric \
-  loss.time_weighting=alpha_bar hydra.run.dir=$RUN $ck
-echo "$(date -u +%FT%TZ) sitting ends (exit $?)" >> $RUN.sittings.log
+train_sitting ablation_full $RUN "" $RUN.sittings.log ablation=eps_hml263 condition=action loss=geometric \
+  loss.time_weighting=alpha_bar

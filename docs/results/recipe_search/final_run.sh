@@ -6,6 +6,4 @@
 # Needs data/bandai (make data-full). Stop a sitting with kill -INT <pid> (Lightning saves nothing on SIGKILL).
 cd "$(dirname "$0")/../../.."; source .venv/bin/activate; source docs/results/sittings.sh; use_tcmalloc
 RUN=outputs/train/bandai_text_long
-ck=$(resume_arg $RUN docs/results/recipe_search/final_run/last.ckpt)
-log_sitting $RUN.sittings.log "$ck"
-python train.py experiment=bandai_text_long logger=csv hydra.run.dir=$RUN $ck >> /tmp/final.log 2>&1
+train_sitting bandai_text_long $RUN docs/results/recipe_search/final_run/last.ckpt $RUN.sittings.log logger=csv >> /tmp/final.log 2>&1

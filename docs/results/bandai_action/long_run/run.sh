@@ -4,9 +4,5 @@
 # Needs data/bandai (make data-full). Stop a sitting after a step checkpoint with kill -9 <python pid>
 # (a background job ignores SIGINT). Rules: rules.md beside this script.
 cd "$(dirname "$0")/../../../.."; source .venv/bin/activate; source docs/results/sittings.sh; use_tcmalloc
-RUN=outputs/train/bandai_action_long
-ck=$(resume_arg $RUN docs/results/bandai_action/long_run/last.ckpt)
-mkdir -p outputs/train
-log_sitting $RUN.sittings.log "$ck"
-python train.py experiment=bandai_action_long logger=csv hydra.run.dir=$RUN $ck
-echo "$(date -u +%FT%TZ) sitting ends (exit $?)" >> $RUN.sittings.log
+RUN=outputs/train/bandai_action_long; HERE=docs/results/bandai_action/long_run
+train_sitting bandai_action_long $RUN $HERE/last.ckpt $RUN.sittings.log logger=csv
