@@ -79,12 +79,18 @@ def guarded(fn):
 
 def _exit_stopped(stop: BaseException):
     """SIGTERM's line and exit 143, or Ctrl-C's and exit 130."""
-    _RECEIVED.clear()  # reported: a later command in this process starts with none
+    line, code = stop_report(stop)
+    print(f"error: {line}", file=sys.stderr)
+    sys.exit(code)
+
+
+def stop_report(stop: BaseException) -> tuple[str, int]:
+    """A stop's line (without ``error: ``) and exit code: SIGTERM's (`Stopped`) and 143, or Ctrl-C's and 130. The
+    stop is then reported: a later command in this process starts with no signal noted."""
+    _RECEIVED.clear()
     if isinstance(stop, Stopped):
-        print(f"error: {stop.line}", file=sys.stderr)
-        sys.exit(SIGTERM_EXIT)
-    print("error: interrupted (Ctrl-C)", file=sys.stderr)
-    sys.exit(130)
+        return stop.line, SIGTERM_EXIT
+    return "interrupted (Ctrl-C)", 130
 
 
 def signal_behind(err: BaseException) -> BaseException | None:

@@ -32,7 +32,7 @@ from motiondiff.data.preparing.writer import (  # noqa: F401  (PrepareError, che
     process_and_write,
 )
 from motiondiff.data.sources import bandai
-from motiondiff.runtime.boundary import SIGTERM_EXIT, Stopped, error_line, signal_behind, stop_on_sigterm
+from motiondiff.runtime.boundary import Stopped, error_line, signal_behind, stop_on_sigterm, stop_report
 
 
 def prepare_bandai(
@@ -171,20 +171,12 @@ def _prepare(args) -> int:
     except (PrepareError, SourceError, bandai.BandaiLayoutError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"error: interrupted (Ctrl-C); {UNCHANGED}", file=sys.stderr)
-        return 130
-    except Stopped as stop:  # SIGTERM (stop_on_sigterm), reported once the progress bar has closed
-        print(f"error: {stop.line}", file=sys.stderr)
-        return SIGTERM_EXIT
+    except (KeyboardInterrupt, Stopped) as stop:  # Ctrl-C, SIGTERM: reported once the progress bar has closed
+        return _stopped(stop)
     except Exception as err:  # noqa: BLE001 - expected failures (disk, permissions, text) as one line; bugs re-raised
         stop = signal_behind(err)
         if stop is not None:  # a signal that C code turned into another error
-            print(
-                f"error: {stop.line}" if isinstance(stop, Stopped) else f"error: interrupted (Ctrl-C); {UNCHANGED}",
-                file=sys.stderr,
-            )
-            return SIGTERM_EXIT if isinstance(stop, Stopped) else 130
+            return _stopped(stop)
         line = error_line(err)
         if line is None:
             raise
@@ -192,6 +184,13 @@ def _prepare(args) -> int:
         return 2
     print_report(report, Path(args.out))
     return 0
+
+
+def _stopped(stop: BaseException) -> int:
+    """A stop's one line (Ctrl-C's says the data is unchanged; SIGTERM's line already does) and its exit code."""
+    line, code = stop_report(stop)
+    print(f"error: {line}" + ("" if isinstance(stop, Stopped) else f"; {UNCHANGED}"), file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":
