@@ -105,3 +105,5 @@ def test_unconstrained_jp_model_with_smoothing_reports_its_own_feature_smoothnes
         0 < metrics["real"]["smoothness_own"][0] <= 1
         and "Smoothness (own features)" in (tmp_path / "table.md").read_text()
     )
+    table = (tmp_path / "table.md").read_text()  # an unconditioned model is sampled with neither guidance nor pools
+    assert "guidance none (unconditioned)" in table and "R-precision pools" not in table

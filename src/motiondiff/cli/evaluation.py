@@ -229,12 +229,14 @@ def report_evaluation(cfg: DictConfig, module, dm, out: Path, source: str) -> di
     protocol = PROTOCOL[module.condition_kind]
     name = f"{module.hparams.dataset} {module.condition_kind} model"
     table = {"Real": rows["Real"], name: rows["Model"]}
+    unconditioned = module.condition_kind == "none"  # no guidance, no R-precision: neither applies
+    pools = "" if unconditioned else f"; R-precision pools of min({cfg.pool_size}, clips)"
     notes = [
         f"checkpoint: {source}",
         f"{cfg.replications} replications ({cfg.mm_replications} for MultiModality), mean ± 95% CI; "
-        f"{len(EvalClips.from_dataset(dm.dataset(cfg.split)))} {cfg.split} clips; R-precision pools of "
-        f"min({cfg.pool_size}, clips)",
-        f"sampler {cfg.sampler.name}, steps {steps or 'default'}, guidance {guidance:g}, temporal smoothing "
+        f"{len(EvalClips.from_dataset(dm.dataset(cfg.split)))} {cfg.split} clips{pools}",
+        f"sampler {cfg.sampler.name}, steps {steps or 'default'}, "
+        f"guidance {'none (unconditioned)' if unconditioned else f'{guidance:g}'}, temporal smoothing "
         f"sigma {sigma or 'off'}, safe x̂0 {module.clip_rule or 'none'}, timestep spacing "
         f"{module.timestep_spacing or 'sampler default'}, {cfg.precision}; "
         f"{timings['motions']} motions generated in {timings['generation_s']:.0f} s; whole evaluation {wall:.0f} s",
