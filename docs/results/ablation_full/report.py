@@ -164,14 +164,27 @@ def fmt(value, spec: str) -> str:
     return "–" if value is None else format(value, spec)
 
 
+REP_COLOURS = dict(zip(REPS, ("tab:blue", "tab:orange", "tab:green", "tab:red"), strict=True))
+PREDICTION_LINES = {"x0": "-", "eps": ":", "v": "--"}
+
+
+def line_style(cell: str, index: int) -> dict:
+    """vvMDM's 12 cells: the colour says the representation, the line the prediction (12 lines outrun one palette);
+    other tables: the palette in order."""
+    parts = cell.split("_")
+    if len(parts) == 3 and parts[1] in PREDICTION_LINES and parts[2] in REP_COLOURS:
+        return {"color": REP_COLOURS[parts[2]], "linestyle": PREDICTION_LINES[parts[1]]}
+    return {"color": f"C{index}"}
+
+
 def plot(name: str, title: str, rows: list[dict]) -> str | None:
     drawn = [r for r in rows if r["fid"]]
     if not drawn:
         return None
     fig, ax = plt.subplots(figsize=(7, 4))
-    for r in drawn:
+    for i, r in enumerate(drawn):
         steps, values = zip(*r["fid"], strict=True)
-        ax.plot(steps, values, marker="o", ms=3, label=LABELS.get(r["cell"], r["cell"]))
+        ax.plot(steps, values, marker="o", ms=3, label=LABELS.get(r["cell"], r["cell"]), **line_style(r["cell"], i))
     ax.set(yscale="log", xlabel="training step", ylabel="in-training val FID (64 clips)", title=title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
