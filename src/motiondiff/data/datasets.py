@@ -98,19 +98,27 @@ class MotionDataset(Dataset):
     def _item_rng(self, epoch: int, index: int) -> np.random.Generator:
         return np.random.default_rng((self.seed, int(epoch), int(index)))
 
+    @property
+    def draws_window_lengths(self) -> bool:
+        """Whether an item's length is drawn (training with random window lengths or a share of first windows), so
+        that it depends on the item's own random draws."""
+        return self.train and (self.window_min_frames is not None or self.first_window_share > 0)
+
     def _window(self, rec: MotionRecord, rng: np.random.Generator) -> tuple[int, bool]:
         """(frames, whether the window is the clip's first): the first draws of ``rng``, so `item_lengths` can
         repeat them. No draw is added where `first_window_share` is 0, so earlier runs resume unchanged."""
         n = min(rec.length, self.max_frames)
-        first = not self.train or (self.first_window_share > 0 and rng.random() < self.first_window_share)
-        if self.train and not first and self.window_min_frames is not None:
-            n = int(rng.integers(min(n, self.window_min_frames), n + 1))
+        first = not self.train
+        if self.draws_window_lengths:
+            first = self.first_window_share > 0 and rng.random() < self.first_window_share
+            if not first and self.window_min_frames is not None:
+                n = int(rng.integers(min(n, self.window_min_frames), n + 1))
         return max(self.unit_length, n - n % self.unit_length), first
 
     def item_lengths(self, epoch: int) -> np.ndarray:
         """Frames of every item of ``epoch``: the ``length`` that ``self[(epoch, i)]`` returns, without building the
         items (a length-bucketing sampler groups by it). Fixed unless training windows have random lengths."""
-        if self.train and (self.window_min_frames is not None or self.first_window_share > 0):
+        if self.draws_window_lengths:
             lengths = [self._window(r, self._item_rng(epoch, i))[0] for i, r in enumerate(self.records)]
         else:  # no draw: self.rng is not touched
             lengths = [self._window(r, self.rng)[0] for r in self.records]
