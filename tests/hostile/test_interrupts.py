@@ -165,14 +165,14 @@ def test_a_signal_that_c_code_dropped_for_another_error_is_still_the_signal(caps
             pass
         raise ValueError("Invalid bounding box")
 
-    previous = signal.getsignal(signal.SIGTERM), signal.signal(signal.SIGINT, signal.default_int_handler)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    restore = stop_on_sigterm(kept="")
     try:
-        stop_on_sigterm(kept="")
         with pytest.raises(SystemExit) as exit_:
             guarded(drawing)()
     finally:
-        signal.signal(signal.SIGTERM, previous[0])
-        signal.signal(signal.SIGINT, previous[1])
+        restore()
+        signal.signal(signal.SIGINT, previous)
     assert exit_.value.code == code and capsys.readouterr().err.strip() == line
     with pytest.raises(ValueError, match="bounding box"):  # reported once: the next error is an error again
         guarded(_plain_error)()
@@ -180,3 +180,23 @@ def test_a_signal_that_c_code_dropped_for_another_error_is_still_the_signal(caps
 
 def _plain_error():
     raise ValueError("Invalid bounding box")
+
+
+def test_prepare_called_in_process_gives_the_callers_signal_handlers_back(tmp_path):
+    """prepare's main() installs its Ctrl-C and SIGTERM handlers for its run; a program that calls it in-process
+    gets its own handlers back, and no signal noted during the run outlives it."""
+    from motiondiff.data.preparing.prepare import main
+
+    def callers_handler(signum, frame):
+        pass
+
+    previous = signal.signal(signal.SIGTERM, callers_handler), signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        code = main(["bandai", "--src", str(tmp_path / "missing"), "--out", str(tmp_path / "out")])
+        assert code == 2
+        assert signal.getsignal(signal.SIGTERM) is callers_handler
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        assert signal_behind(ValueError("later")) is None
+    finally:
+        signal.signal(signal.SIGTERM, previous[0])
+        signal.signal(signal.SIGINT, previous[1])

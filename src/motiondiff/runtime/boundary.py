@@ -129,10 +129,10 @@ def stop_on_sigterm(out: Path | None = None, kept: str | None = None):
     the run folder ``out`` cleaned by `run_folder` (a training run keeps its checkpoints, and the line says from
     which step and how to resume). Without it Python dies at once and leaves its lock; Lightning's own handler would
     end training with exit code 0. ``kept``: what the line says is left instead (a command without a run folder).
-    Main thread only. Returns the handler it replaced (None where it installed nothing), for a caller that restores
-    it (a command called in-process)."""
+    Main thread only. Returns a function that puts back the handlers it replaced and forgets the signals noted, for
+    a command called in-process (it does nothing where nothing was installed)."""
     if threading.current_thread() is not threading.main_thread():
-        return None
+        return lambda: None
     _RECEIVED.clear()
 
     def stop(signum, frame):
@@ -143,9 +143,16 @@ def stop_on_sigterm(out: Path | None = None, kept: str | None = None):
         _RECEIVED.append(KeyboardInterrupt())
         raise _RECEIVED[-1]
 
+    previous = {signal.SIGTERM: signal.signal(signal.SIGTERM, stop)}
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # an ignored Ctrl-C (nohup) stays ignored
-        signal.signal(signal.SIGINT, interrupt)  # Python's own KeyboardInterrupt, noted
-    return signal.signal(signal.SIGTERM, stop)
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, interrupt)  # Python's own KeyboardInterrupt, noted
+
+    def restore() -> None:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        _RECEIVED.clear()
+
+    return restore
 
 
 def _resume_hint(out: Path | None) -> str:

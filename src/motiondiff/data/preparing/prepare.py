@@ -13,7 +13,6 @@ the previous dataset or the new one, never a mixture of half-written files.
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 from pathlib import Path
 
@@ -147,12 +146,11 @@ UNCHANGED = "the output folder is as it was before (prepared datasets are swappe
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    previous = stop_on_sigterm(kept=f"; {UNCHANGED}")  # a scheduler's kill ends like Ctrl-C: exit 143, data kept
+    restore = stop_on_sigterm(kept=f"; {UNCHANGED}")  # a scheduler's kill ends like Ctrl-C: exit 143, data kept
     try:
         return _prepare(args)
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        restore()  # main() may be called in-process: the caller's Ctrl-C and SIGTERM handlers come back
 
 
 def _prepare(args) -> int:
