@@ -149,7 +149,8 @@ def stop_on_sigterm(out: Path | None = None, kept: str | None = None):
 
     def restore() -> None:
         for signum, handler in previous.items():
-            signal.signal(signum, handler)
+            if handler is not None:  # None: a handler installed outside Python, which cannot be put back from here
+                signal.signal(signum, handler)
         _RECEIVED.clear()
 
     return restore
