@@ -168,12 +168,20 @@ REP_COLOURS = dict(zip(REPS, ("tab:blue", "tab:orange", "tab:green", "tab:red"),
 PREDICTION_LINES = {"x0": "-", "eps": ":", "v": "--"}
 
 
+def vvmdm_parts(cell: str) -> tuple[str, str] | None:
+    """(prediction, representation) of a vvMDM Tab. 1 cell (<condition>_<prediction>_<representation>), else None."""
+    parts = cell.split("_")
+    if len(parts) == 3 and parts[1] in PREDICTION_LINES and parts[2] in REP_COLOURS:
+        return parts[1], parts[2]
+    return None
+
+
 def line_style(cell: str, index: int) -> dict:
     """vvMDM's 12 cells: the colour says the representation, the line the prediction (12 lines outrun one palette);
     other tables: the palette in order."""
-    parts = cell.split("_")
-    if len(parts) == 3 and parts[1] in PREDICTION_LINES and parts[2] in REP_COLOURS:
-        return {"color": REP_COLOURS[parts[2]], "linestyle": PREDICTION_LINES[parts[1]]}
+    parts = vvmdm_parts(cell)
+    if parts is not None:
+        return {"color": REP_COLOURS[parts[1]], "linestyle": PREDICTION_LINES[parts[0]]}
     return {"color": f"C{index}"}
 
 
@@ -218,11 +226,12 @@ def table(rows: list[dict]) -> list[str]:
     for r in rows:
         if r["test"]:
             group = real_rows.setdefault(measured(r, "real"), [])
-            rep = r["cell"].rsplit("_", 1)[-1]
-            if rep not in group:
-                group.append(rep)
-    for values, reps in real_rows.items():
-        whose = f" ({', '.join(reps)} cells)" if len(real_rows) > 1 else ""
+            parts = vvmdm_parts(r["cell"])
+            whose = parts[1] if parts else LABELS.get(r["cell"], r["cell"])
+            if whose not in group:
+                group.append(whose)
+    for values, cells in real_rows.items():
+        whose = f" ({', '.join(cells)} cells)" if len(real_rows) > 1 else ""
         out.append(f"| **real test clips**{whose} | | | | | | | {values} | |")
     for r in rows:
         best = f"{r['best'][1]:.3f} ({r['best'][0]:,})" if r["best"] else "–"
