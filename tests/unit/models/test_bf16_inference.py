@@ -4,6 +4,8 @@ an error and after nested or overlapping uses too)."""
 
 from __future__ import annotations
 
+import threading
+
 import pytest
 import torch
 
@@ -81,3 +83,67 @@ def test_disabled_inside_an_enabled_block_of_the_same_model_keeps_its_bf16():
         with bf16_inference(other, "cpu", enabled=False):  # another model's full precision stays full precision
             assert other(x, t, cond=cond, mask=mask).dtype == torch.float32
     assert all(p.dtype == torch.float32 for p in model.parameters())
+
+
+def _in_thread(fn):
+    errors = []
+
+    def run():
+        try:
+            fn()
+        except Exception as e:  # noqa: BLE001 - handed to the test thread, which fails with it
+            errors.append(e)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    return thread, errors
+
+
+def test_a_bf16_block_started_during_another_threads_full_precision_block_leaves_its_weights_float32():
+    # the demo serves requests in worker threads: a cast in one would hand another's float32 matmuls bf16 weights
+    model = _denoiser("trans_enc")
+    x, t, cond, mask = _inputs()
+    with torch.inference_mode():
+        full = model(x, t, cond=cond, mask=mask)
+        with torch.autocast("cpu", dtype=torch.bfloat16):
+            expected_bf16 = model(x, t, cond=cond, mask=mask)
+    inside, bf16_done, got = threading.Event(), threading.Event(), {}
+
+    def full_precision():
+        with torch.inference_mode(), bf16_inference(model, "cpu", enabled=False):
+            inside.set()
+            assert bf16_done.wait(30)
+            got["full"] = model(x, t, cond=cond, mask=mask)
+
+    thread, errors = _in_thread(full_precision)
+    assert inside.wait(30)
+    with torch.inference_mode(), bf16_inference(model, "cpu"):
+        assert all(p.dtype == torch.float32 for p in model.parameters())
+        got["bf16"] = model(x, t, cond=cond, mask=mask)
+    bf16_done.set()
+    thread.join(30)
+    assert not errors and not thread.is_alive()
+    assert torch.equal(got["full"], full) and torch.equal(got["bf16"], expected_bf16)
+
+
+def test_a_full_precision_block_waits_for_another_threads_cast_to_end():
+    model = _denoiser("gru")
+    x, t, cond, mask = _inputs()
+    with torch.inference_mode():
+        full = model(x, t, cond=cond, mask=mask)
+    started, got = threading.Event(), {}
+
+    def full_precision():
+        started.set()
+        with torch.inference_mode(), bf16_inference(model, "cpu", enabled=False):
+            got["dtypes"] = {p.dtype for p in model.parameters()}
+            got["full"] = model(x, t, cond=cond, mask=mask)
+
+    with torch.inference_mode(), bf16_inference(model, "cpu"):
+        thread, errors = _in_thread(full_precision)
+        assert started.wait(30)
+        thread.join(0.5)
+        assert thread.is_alive() and "full" not in got  # waiting: the weights are bf16 here
+    thread.join(30)
+    assert not errors and not thread.is_alive()
+    assert got["dtypes"] == {torch.float32} and torch.equal(got["full"], full)
